@@ -1,0 +1,12 @@
+// Subcommands of the `moslam` CLI. Each Add*Command registers one subcommand (and its own
+// subcommands) on the app; the callback runs the work and throws InputError on bad input.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace moslam::app {
+
+void AddEvalCommand(CLI::App& app);
+void AddDatasetCommand(CLI::App& app);
+
+}  // namespace moslam::app

@@ -1,0 +1,36 @@
+// moslam: movable-object-aware visual SLAM. One binary, one subcommand per job.
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "commands.h"
+#include "moslam/util/error.h"
+#include "moslam/util/log.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"moslam: movable-object-aware visual SLAM (ORB-SLAM2 family) and its tools"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "moslam 0.1.0");
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level,
+                 "Log verbosity: trace, debug, info, warn, error, critical, off")
+      ->capture_default_str();
+  app.parse_complete_callback([&] { moslam::SetupLogging(log_level); });
+
+  moslam::app::AddEvalCommand(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const moslam::InputError& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    spdlog::error("unexpected error: {}", e.what());
+    return 3;
+  }
+  return 0;
+}

@@ -1,0 +1,40 @@
+# Helpers that keep every module's CMakeLists.txt short and uniform.
+#
+#   moslam_module(<name> SOURCES ... DEPS ...)   -> library target moslam_<name>, alias moslam::<name>
+#   moslam_test(<module> <name> SOURCES ... DEPS ...) -> test binary, registered as <module>/<name>
+#   moslam_benchmark(<name> SOURCES ... DEPS ...)     -> Google Benchmark program (not a test)
+
+function(moslam_module name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_library(moslam_${name} ${ARG_SOURCES})
+  add_library(moslam::${name} ALIAS moslam_${name})
+  # Headers are included as "moslam/<module>/<file>.h".
+  target_include_directories(moslam_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+  target_link_libraries(moslam_${name} PUBLIC ${ARG_DEPS})
+endfunction()
+
+function(moslam_test module name)
+  if(NOT MOSLAM_BUILD_TESTS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  set(target test_${module}_${name})
+  add_executable(${target} ${ARG_SOURCES})
+  target_link_libraries(${target} PRIVATE ${ARG_DEPS} moslam::testing GTest::gtest GTest::gmock
+                                          GTest::gtest_main)
+  add_test(NAME ${module}/${name} COMMAND ${target})
+  # Tests run from the source tree so that relative paths in messages are short; shared data is
+  # found through MOSLAM_SHARED (see src/moslam/testing/shared_data.h).
+  set_tests_properties(${module}/${name} PROPERTIES WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
+                                                    LABELS ${module})
+endfunction()
+
+function(moslam_benchmark name)
+  if(NOT MOSLAM_BUILD_BENCHMARKS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(bench_${name} ${ARG_SOURCES})
+  target_link_libraries(bench_${name} PRIVATE ${ARG_DEPS} moslam::testing benchmark::benchmark
+                                              benchmark::benchmark_main)
+endfunction()

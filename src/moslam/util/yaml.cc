@@ -1,0 +1,183 @@
+#include "moslam/util/yaml.h"
+
+#include <cmath>
+
+#include <opencv2/core.hpp>
+
+#include "moslam/util/error.h"
+#include "moslam/util/strings.h"
+#include "moslam/util/text_file.h"
+
+namespace moslam {
+
+struct YamlFile::Impl {
+  cv::FileStorage storage;
+  std::map<std::string, cv::FileNode> leaves;  // full dotted key -> node
+};
+
+namespace {
+
+// OpenCV stores matrices as maps {rows, cols, dt, data}; they are one value, not four keys.
+bool IsOpenCvMatrix(const cv::FileNode& node) {
+  return node.isMap() && !node["rows"].empty() && !node["cols"].empty() && !node["data"].empty();
+}
+
+void Flatten(const cv::FileNode& node, const std::string& prefix,
+             std::map<std::string, cv::FileNode>* leaves) {
+  for (auto it = node.begin(); it != node.end(); ++it) {
+    const cv::FileNode child = *it;
+    const std::string key = prefix.empty() ? child.name() : prefix + "." + child.name();
+    if (child.isMap() && !IsOpenCvMatrix(child)) {
+      Flatten(child, key, leaves);
+    } else {
+      (*leaves)[key] = child;
+    }
+  }
+}
+
+[[noreturn]] void WrongType(const std::string& path, const std::string& key, const char* expected) {
+  ThrowInFile(path, fmt::format("key '{}' must be {}", key, expected));
+}
+
+}  // namespace
+
+YamlFile::YamlFile(const std::string& path) : path_(path), impl_(std::make_unique<Impl>()) {
+  RequireFile(path, "options file");
+  try {
+    impl_->storage.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
+  } catch (const cv::Exception& e) {
+    ThrowInFile(path, fmt::format("is not valid YAML: {}", e.err));
+  }
+  if (!impl_->storage.isOpened()) ThrowInFile(path, "cannot be parsed as YAML");
+  Flatten(impl_->storage.root(), "", &impl_->leaves);
+}
+
+YamlFile::~YamlFile() = default;
+YamlFile::YamlFile(YamlFile&&) noexcept = default;
+YamlFile& YamlFile::operator=(YamlFile&&) noexcept = default;
+
+bool YamlFile::Has(const std::string& key) const { return impl_->leaves.count(key) > 0; }
+
+std::vector<std::string> YamlFile::Keys() const {
+  std::vector<std::string> keys;
+  for (const auto& [key, node] : impl_->leaves) keys.push_back(key);
+  return keys;
+}
+
+template <>
+bool YamlFile::Read<double>(const std::string& key, double* value) {
+  const auto it = impl_->leaves.find(key);
+  if (it == impl_->leaves.end()) return false;
+  read_.insert(key);
+  const cv::FileNode& node = it->second;
+  if (node.isInt()) {
+    *value = static_cast<int>(node);
+  } else if (node.isReal()) {
+    *value = node.real();
+  } else if (node.isString()) {
+    // OpenCV's YAML reader keeps ".nan"/"nan"-like scalars as strings; reject them explicitly.
+    const auto parsed = ParseDouble(node.string());
+    if (!parsed) WrongType(path_, key, "a number");
+    *value = *parsed;
+  } else {
+    WrongType(path_, key, "a number");
+  }
+  if (!std::isfinite(*value)) WrongType(path_, key, "a finite number");
+  return true;
+}
+
+template <>
+bool YamlFile::Read<float>(const std::string& key, float* value) {
+  double v = 0.0;
+  if (!Read<double>(key, &v)) return false;
+  *value = static_cast<float>(v);
+  return true;
+}
+
+template <>
+bool YamlFile::Read<int>(const std::string& key, int* value) {
+  const auto it = impl_->leaves.find(key);
+  if (it == impl_->leaves.end()) return false;
+  read_.insert(key);
+  if (!it->second.isInt()) WrongType(path_, key, "an integer");
+  *value = static_cast<int>(it->second);
+  return true;
+}
+
+template <>
+bool YamlFile::Read<bool>(const std::string& key, bool* value) {
+  const auto it = impl_->leaves.find(key);
+  if (it == impl_->leaves.end()) return false;
+  read_.insert(key);
+  const cv::FileNode& node = it->second;
+  if (node.isInt()) {
+    const int v = static_cast<int>(node);
+    if (v != 0 && v != 1) WrongType(path_, key, "0 or 1 (or true/false)");
+    *value = v == 1;
+  } else if (node.isString()) {
+    const std::string s = ToLower(node.string());
+    if (s == "true") {
+      *value = true;
+    } else if (s == "false") {
+      *value = false;
+    } else {
+      WrongType(path_, key, "0 or 1 (or true/false)");
+    }
+  } else {
+    WrongType(path_, key, "0 or 1 (or true/false)");
+  }
+  return true;
+}
+
+template <>
+bool YamlFile::Read<std::string>(const std::string& key, std::string* value) {
+  const auto it = impl_->leaves.find(key);
+  if (it == impl_->leaves.end()) return false;
+  read_.insert(key);
+  if (!it->second.isString()) WrongType(path_, key, "a string");
+  *value = it->second.string();
+  return true;
+}
+
+template <>
+bool YamlFile::Read<std::vector<double>>(const std::string& key, std::vector<double>* value) {
+  const auto it = impl_->leaves.find(key);
+  if (it == impl_->leaves.end()) return false;
+  read_.insert(key);
+  cv::FileNode node = it->second;
+  if (IsOpenCvMatrix(node)) node = node["data"];
+  if (!node.isSeq()) WrongType(path_, key, "a list of numbers");
+  value->clear();
+  for (auto e = node.begin(); e != node.end(); ++e) {
+    if (!(*e).isReal() && !(*e).isInt()) WrongType(path_, key, "a list of numbers");
+    value->push_back((*e).isInt() ? static_cast<double>(static_cast<int>(*e)) : (*e).real());
+  }
+  return true;
+}
+
+template <typename T>
+T YamlFile::Required(const std::string& key) {
+  T value{};
+  if (!Read(key, &value)) ThrowInFile(path_, fmt::format("required key '{}' is missing", key));
+  return value;
+}
+
+template double YamlFile::Required<double>(const std::string&);
+template float YamlFile::Required<float>(const std::string&);
+template int YamlFile::Required<int>(const std::string&);
+template bool YamlFile::Required<bool>(const std::string&);
+template std::string YamlFile::Required<std::string>(const std::string&);
+template std::vector<double> YamlFile::Required<std::vector<double>>(const std::string&);
+
+void YamlFile::IgnorePrefix(const std::string& prefix) { ignored_prefixes_.push_back(prefix); }
+
+void YamlFile::RejectUnread() const {
+  for (const auto& [key, node] : impl_->leaves) {
+    if (read_.count(key)) continue;
+    bool ignored = false;
+    for (const std::string& prefix : ignored_prefixes_) ignored |= StartsWith(key, prefix);
+    if (!ignored) ThrowInFile(path_, fmt::format("unknown key '{}' (misspelt?)", key));
+  }
+}
+
+}  // namespace moslam
