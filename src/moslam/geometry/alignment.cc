@@ -47,7 +47,7 @@ std::optional<SE3> AlignHorn(const Eigen::Matrix3Xd& source, const Eigen::Matrix
   // the largest eigenvalue. Ordering (w, x, y, z).
   Eigen::Matrix4d N;
   N << S(0, 0) + S(1, 1) + S(2, 2), S(1, 2) - S(2, 1), S(2, 0) - S(0, 2), S(0, 1) - S(1, 0),  //
-      S(1, 2) - S(2, 1), S(0, 0) - S(1, 1) - S(2, 2), S(0, 1) + S(1, 0), S(2, 0) + S(0, 2),  //
+      S(1, 2) - S(2, 1), S(0, 0) - S(1, 1) - S(2, 2), S(0, 1) + S(1, 0), S(2, 0) + S(0, 2),   //
       S(2, 0) - S(0, 2), S(0, 1) + S(1, 0), -S(0, 0) + S(1, 1) - S(2, 2), S(1, 2) + S(2, 1),  //
       S(0, 1) - S(1, 0), S(2, 0) + S(0, 2), S(1, 2) + S(2, 1), -S(0, 0) - S(1, 1) + S(2, 2);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(N);

@@ -61,7 +61,9 @@ Sim3 Sim3::operator*(const Sim3& o) const {
   return Sim3(q_ * o.q_, s_ * (q_ * o.t_) + t_, s_ * o.s_);
 }
 
-SE3 Sim3::operator*(const SE3& T) const { return SE3(q_ * T.rotation(), (*this) * T.translation()); }
+SE3 Sim3::operator*(const SE3& T) const {
+  return SE3(q_ * T.rotation(), (*this) * T.translation());
+}
 
 Sim3 Sim3::Interpolate(const Sim3& a, const Sim3& b, double s) {
   return a * Exp(s * (a.Inverse() * b).Log());

@@ -35,8 +35,8 @@ class TempDir {
 }  // namespace moslam::testing
 
 // Declares `const std::string var` = the shared path, or skips the test when it is absent.
-#define MOSLAM_SHARED_OR_SKIP(var, relative)                                      \
-  const std::string var = ::moslam::testing::FindShared(relative);                \
-  if (var.empty())                                                                \
+#define MOSLAM_SHARED_OR_SKIP(var, relative)                                          \
+  const std::string var = ::moslam::testing::FindShared(relative);                    \
+  if (var.empty())                                                                    \
   GTEST_SKIP() << "shared data not found: " << ::moslam::testing::SharedRoot() << "/" \
                << (relative) << " (set MOSLAM_SHARED to the folder that holds data/)"

@@ -1,6 +1,7 @@
 // Invariant checks: the first of moslam's three error tiers.
 //
-//   1. A broken invariant (a bug in moslam) aborts through MOSLAM_CHECK, with file, line and message.
+//   1. A broken invariant (a bug in moslam) aborts through MOSLAM_CHECK, with file, line and
+//   message.
 //   2. Bad input or configuration throws moslam::InputError (util/error.h) naming what and where.
 //   3. Expected failures (tracking lost, RANSAC failed) are returned as results, never thrown.
 //
@@ -35,9 +36,9 @@ struct Voidify {
 
 }  // namespace moslam::internal
 
-#define MOSLAM_CHECK_IMPL(condition, text)                              \
-  (condition) ? (void)0                                                 \
-              : ::moslam::internal::Voidify() &                         \
+#define MOSLAM_CHECK_IMPL(condition, text)      \
+  (condition) ? (void)0                         \
+              : ::moslam::internal::Voidify() & \
                     ::moslam::internal::CheckFailure(__FILE__, __LINE__, text).stream()
 
 // MOSLAM_CHECK(x > 0) << "x is " << x;
