@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Sets up, builds and runs the whole test suite. Usage: scripts/test.sh [release|asan|tsan]
+# Shared data (../shared, or MOSLAM_SHARED) is used when present; tests that need it skip
+# with a message otherwise.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+kind="${1:-release}"
+scripts/setup.sh
+scripts/build.sh "$kind"
+case "$kind" in
+  release) dir=build ;;
+  *) dir="build-$kind" ;;
+esac
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+ctest --test-dir "$dir" --output-on-failure -j "${MOSLAM_JOBS:-$(nproc)}"
