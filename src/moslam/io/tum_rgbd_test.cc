@@ -55,7 +55,8 @@ TEST(AssociateTimestamps, PicksTheSmallestDifferenceFirstNotTheNearestNeighbour)
 
 TEST(AssociateTimestamps, UsesEachStampOnce) {
   const Pairs pairs = AssociateTimestamps({1.0, 1.001, 1.002}, {1.0012}, 0.0, 0.02);
-  EXPECT_THAT(pairs, ElementsAre(std::make_pair(size_t{1}, size_t{0})));  // 0.0002 beats 0.0008 and 0.0012
+  EXPECT_THAT(pairs,
+              ElementsAre(std::make_pair(size_t{1}, size_t{0})));  // 0.0002 beats 0.0008 and 0.0012
   const Pairs reverse = AssociateTimestamps({1.0012}, {1.0, 1.001, 1.002}, 0.0, 0.02);
   EXPECT_THAT(reverse, ElementsAre(std::make_pair(size_t{0}, size_t{1})));
 }
