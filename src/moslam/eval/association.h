@@ -19,7 +19,7 @@ struct Association {
 // TUM associate.py (used by evaluate_ate.py): every pair with |a - (b + offset)| < max_dt is a
 // candidate; candidates are taken greedily by increasing difference (ties by gt stamp, then est
 // stamp), each stamp at most once. The result is sorted by gt stamp. A stamp that repeats counts
-// once, as its later pose (the scripts read files into a dict).
+// once, as its later pose (the scripts read files into a dict). Stamps must be non-decreasing.
 Association AssociateGreedy(const std::vector<double>& gt_stamps,
                             const std::vector<double>& est_stamps, double offset, double max_dt);
 
