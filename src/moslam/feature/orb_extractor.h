@@ -44,6 +44,8 @@ class OrbExtractor {
   // level-0 position rounds to a masked pixel are never produced. Throws InputError on a wrong
   // image or mask. Returns exactly options.num_features keypoints whenever the unmasked image
   // has enough corners: a level that cannot fill its quota passes the rest to the next finer one.
+  // The per-cell FAST threshold is chosen before the mask is applied, as ORB-SLAM2 would choose
+  // it, so a mask only removes candidates and never changes the others.
   void Extract(const cv::Mat& image, const cv::Mat& mask, OrbFeatures* features);
   OrbFeatures Extract(const cv::Mat& image, const cv::Mat& mask = cv::Mat());
 
