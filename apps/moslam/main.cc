@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
 
   moslam::app::AddEvalCommand(app);
   moslam::app::AddDatasetCommand(app);
+  moslam::app::AddFeaturesCommand(app);
 
   try {
     app.parse(argc, argv);

@@ -84,12 +84,16 @@ void OrbExtractorOptions::Check() const {
   if (num_features <= 0) {
     ThrowInput("ORBextractor.nFeatures must be positive, got {}", num_features);
   }
-  if (!std::isfinite(scale_factor) || !(scale_factor > 1.0)) {
-    ThrowInput("ORBextractor.scaleFactor must be greater than 1, got {}", scale_factor);
+  // The upper bound keeps the level sizes meaningful; ORB-SLAM2 uses 1.2.
+  if (!std::isfinite(scale_factor) || !(scale_factor > 1.0 && scale_factor <= 4.0)) {
+    ThrowInput("ORBextractor.scaleFactor must be in (1, 4], got {}", scale_factor);
   }
-  if (num_levels < 1) ThrowInput("ORBextractor.nLevels must be at least 1, got {}", num_levels);
-  if (ini_th_fast < 1 || ini_th_fast > 255) {
-    ThrowInput("ORBextractor.iniThFAST must be in [1, 255], got {}", ini_th_fast);
+  if (num_levels < 1 || num_levels > 32) {
+    ThrowInput("ORBextractor.nLevels must be in [1, 32], got {}", num_levels);
+  }
+  // FAST compares grey-level differences with > threshold: 255 would never fire.
+  if (ini_th_fast < 1 || ini_th_fast > 254) {
+    ThrowInput("ORBextractor.iniThFAST must be in [1, 254], got {}", ini_th_fast);
   }
   if (min_th_fast < 1 || min_th_fast > ini_th_fast) {
     ThrowInput("ORBextractor.minThFAST must be in [1, iniThFAST = {}], got {}", ini_th_fast,
