@@ -115,7 +115,10 @@ void RunInfo(const DatasetInfoArgs& args) {
     PrintSettings(settings, args.settings);
     depth_factor = settings.depth_map_factor;
   }
-  if (args.check_images) CheckImages(seq, depth_factor);
+  if (args.check_images) {
+    std::fflush(stdout);  // the summary above comes before the progress lines on stderr
+    CheckImages(seq, depth_factor);
+  }
 }
 
 }  // namespace
