@@ -1,0 +1,54 @@
+// Sparse stereo matching of ORB keypoints between rectified images, following ORB-SLAM2's
+// Frame::ComputeStereoMatches (Mur-Artal & Tardós 2017, Sec. III-A):
+//   1. right keypoints are indexed by image row, each over a band of +-2 * scale of its level;
+//   2. a left keypoint's candidates are right keypoints in its row band, within one pyramid level,
+//      with disparity in [0, bf / min_depth]; the best ORB descriptor distance must be below a
+//      threshold;
+//   3. the match is refined by sum of absolute differences (SAD) of an 11 x 11 patch on the
+//      keypoint's pyramid level over +-5 pixels, then to sub-pixel by a parabola through the
+//      three SAD values around the minimum (rejected when the vertex is more than 1 px away);
+//   4. matches whose SAD exceeds 1.5 * 1.4 * median SAD are discarded as outliers.
+// Depth = bf / disparity.
+#pragma once
+
+#include <vector>
+
+#include "moslam/feature/orb_extractor.h"
+
+namespace moslam::feature {
+
+struct StereoMatchOptions {
+  // Largest Hamming distance (bits of 256) of a descriptor match. ORB-SLAM2 uses
+  // (TH_HIGH + TH_LOW) / 2 = 75.
+  int max_descriptor_distance = 75;
+  // Half-height of a right keypoint's row band, in multiples of its level's scale (> 0).
+  float row_band_scale = 2.0f;
+  // Half-size of the SAD patch in pixels of the keypoint's level (>= 1; 5 -> 11 x 11).
+  int patch_half_size = 5;
+  // SAD search half-width in pixels of the keypoint's level (>= 1).
+  int search_half_width = 5;
+  // Nearest depth accepted, in baselines (> 0): max disparity = bf / (this * baseline) = fx / this.
+  double min_depth_baselines = 1.0;
+  // Matches with SAD > outlier_factor * median SAD are dropped (> 0; ORB-SLAM2: 1.5 * 1.4).
+  double outlier_factor = 1.5 * 1.4;
+
+  // Throws InputError naming the option.
+  void Check() const;
+};
+
+struct StereoMatches {
+  // One entry per left keypoint; -1 where no (inlier) match was found.
+  std::vector<float> u_right;    // sub-pixel column in the right image (level-0 pixels)
+  std::vector<float> depth;      // metres
+  std::vector<int> right_index;  // index of the matched right keypoint
+  int num_matches = 0;
+};
+
+// `left`/`right` come from the last Extract calls of `left_extractor`/`right_extractor` (their
+// pyramids are read for the SAD step), on rectified images of one size. bf (pixel-metres) and
+// fx (pixels) must be > 0 (CHECK).
+StereoMatches MatchStereo(const OrbFeatures& left, const OrbExtractor& left_extractor,
+                          const OrbFeatures& right, const OrbExtractor& right_extractor, double bf,
+                          double fx, const StereoMatchOptions& options = {});
+
+}  // namespace moslam::feature
