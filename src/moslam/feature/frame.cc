@@ -96,7 +96,6 @@ Frame MakeStereoFrame(double timestamp, const cv::Mat& left, const cv::Mat& righ
                       OrbExtractor* right_extractor, const camera::StereoCamera& camera,
                       const StereoMatchOptions& options, const cv::Mat& right_mask) {
   MOSLAM_CHECK(right_extractor != nullptr && right_extractor != left_extractor);
-  options.Check();
   if (right.size() != left.size()) {
     ThrowInput("stereo frame: right image {}x{} differs from left image {}x{}", right.cols,
                right.rows, left.cols, left.rows);

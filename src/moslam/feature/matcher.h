@@ -43,6 +43,13 @@ std::vector<DescriptorMatch> MatchByDescriptor(const std::vector<cv::KeyPoint>& 
                                                const cv::Mat& descriptors2,
                                                const DescriptorMatchOptions& options = {});
 
+// The same between two frames, on their undistorted keypoints.
+inline std::vector<DescriptorMatch> MatchByDescriptor(const Frame& frame1, const Frame& frame2,
+                                                      const DescriptorMatchOptions& options = {}) {
+  return MatchByDescriptor(frame1.keypoints_undistorted, frame1.descriptors,
+                           frame2.keypoints_undistorted, frame2.descriptors, options);
+}
+
 // Given the per-match angle difference (degrees), returns a keep-flag per entry according to the
 // rotation histogram rule above. Exposed for the map-level matchers that come later.
 std::vector<bool> RotationConsistent(const std::vector<float>& angle_differences);

@@ -174,6 +174,24 @@ TEST(MatcherTest, ProjectionMatcherFindsKeypointsOfKnownPose) {
   EXPECT_LT(wrong_correct, 0.02 * frame1.size());
 }
 
+TEST(MatcherTest, FramesMatchByDescriptor) {
+  const camera::PinholeCamera cam = Camera();
+  const cv::Mat image1 = test::TexturedImage(640, 480, 43);
+  const cv::Mat affine = (cv::Mat_<double>(2, 3) << 1, 0, 4.6, 0, 1, -3.2);
+  OrbExtractor e1(Options(800)), e2(Options(800));
+  const Frame f1 = MakeMonocularFrame(0.0, image1, cv::Mat(), &e1, cam);
+  const Frame f2 = MakeMonocularFrame(0.1, Warp(image1, affine), cv::Mat(), &e2, cam);
+  const std::vector<DescriptorMatch> matches = MatchByDescriptor(f1, f2);
+  int correct = 0;
+  for (const DescriptorMatch& m : matches) {
+    const cv::Point2f d =
+        Apply(affine, f1.keypoints[m.index1].pt) - f2.keypoints_undistorted[m.index2].pt;
+    if (std::hypot(d.x, d.y) < 1.5f * f1.scale_factors[f1.keypoints[m.index1].octave]) ++correct;
+  }
+  EXPECT_GT(matches.size(), 0.3 * f1.size());
+  EXPECT_GT(correct, 0.95 * matches.size());
+}
+
 TEST(MatcherTest, OptionsAreChecked) {
   DescriptorMatchOptions d;
   d.ratio = 0.0f;

@@ -106,6 +106,7 @@ StereoMatches MatchStereo(const OrbFeatures& left, const OrbExtractor& left_extr
                           const OrbFeatures& right, const OrbExtractor& right_extractor, double bf,
                           double fx, const StereoMatchOptions& options) {
   MOSLAM_CHECK(bf > 0.0 && fx > 0.0) << "bf " << bf << " fx " << fx;
+  options.Check();
   const size_t n = left.keypoints.size();
   StereoMatches result;
   result.u_right.assign(n, -1.0f);

@@ -46,7 +46,7 @@ struct StereoMatches {
 
 // `left`/`right` come from the last Extract calls of `left_extractor`/`right_extractor` (their
 // pyramids are read for the SAD step), on rectified images of one size. bf (pixel-metres) and
-// fx (pixels) must be > 0 (CHECK).
+// fx (pixels) must be > 0 (CHECK). Throws InputError when options.Check() does.
 StereoMatches MatchStereo(const OrbFeatures& left, const OrbExtractor& left_extractor,
                           const OrbFeatures& right, const OrbExtractor& right_extractor, double bf,
                           double fx, const StereoMatchOptions& options = {});
