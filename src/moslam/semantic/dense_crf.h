@@ -122,6 +122,9 @@ class DenseCrf {
   // depth_m: CV_32F H x W in metres, required when the depth kernel is enabled, else ignored.
   // Throws InputError when sizes or types disagree.
   CrfResult Infer(const cv::Mat& image, const cv::Mat& depth_m, const Unaries& unaries);
+  // The same, reusing the result's buffers when their sizes fit (a video stream).
+  void Infer(const cv::Mat& image, const cv::Mat& depth_m, const Unaries& unaries,
+             CrfResult* result);
 
  private:
   struct Workspace;

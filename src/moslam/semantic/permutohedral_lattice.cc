@@ -4,9 +4,10 @@
 #include <bitset>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <utility>
 
-#include "moslam/semantic/fast_math.h"
+#include "moslam/semantic/crf_simd.h"
 #include "moslam/semantic/thread_pool.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
@@ -19,19 +20,6 @@ namespace {
 constexpr int kFieldBits = 21;
 constexpr int64_t kBias = int64_t{1} << (kFieldBits - 1);
 constexpr float kMaxCoordinate = static_cast<float>(kBias - 64);
-
-// Rows of 4k floats are processed as 4-float vectors (fast_math.h): the compilers'
-// auto-vectorizer gave up on these gather loops.
-
-// dst[0..S) += w * x[0..S)
-template <int S>
-inline void AddScaled(float* dst, float w, const float* x) {
-  if constexpr (S % 4 == 0) {
-    for (int j = 0; j < S; j += 4) Store4(dst + j, Load4(dst + j) + w * Load4(x + j));
-  } else {
-    for (int s = 0; s < S; ++s) dst[s] += w * x[s];
-  }
-}
 
 // One point's place in the lattice: its elevated position, the nearest remainder-0 lattice point
 // rem0, the ordering (rank 0 = largest) of elevated - rem0, and the barycentric weights of the
@@ -162,23 +150,6 @@ auto DispatchDim(int dim, F&& f) {
       MOSLAM_CHECK(false) << "unsupported lattice dimension " << dim;
   }
   return f(std::integral_constant<int, 1>());
-}
-
-// Calls f(std::integral_constant<int, D1>) with D1 = dim + 1 for the feature dimensions the CRF
-// uses (2, 3, 5), and with D1 = 0 (read at run time) for the others: a compile-time simplex size
-// lets the compiler keep a point's accumulators in registers.
-template <typename F>
-void DispatchPoints(int dim, F&& f) {
-  switch (dim) {
-    case 2:
-      return f(std::integral_constant<int, 3>());
-    case 3:
-      return f(std::integral_constant<int, 4>());
-    case 5:
-      return f(std::integral_constant<int, 6>());
-    default:
-      return f(std::integral_constant<int, 0>());
-  }
 }
 
 }  // namespace
@@ -459,154 +430,61 @@ void PermutohedralLattice::ScaleWeights(const float* splat_scale, const float* s
   }
 }
 
-template <int S>
-void PermutohedralLattice::FilterImpl(const float* in, float* out, bool accumulate,
-                                      ThreadPool* pool) {
+simd::LatticeArrays PermutohedralLattice::Arrays() const {
+  simd::LatticeArrays a;
+  a.dim = dim_;
+  a.num_vertices = static_cast<uint32_t>(num_vertices_);
+  a.point_vertex = point_vertex_.data();
+  a.point_weight = point_weight_.data();
+  a.splat_scale = splat_scale_.data();
+  a.slice_scale = slice_scale_.data();
+  a.splat_row = splat_row_.data();
+  a.splat_step = splat_step_.data();
+  a.shared_vertices = shared_vertices_.data();
+  a.splat_chunks = kSplatChunks;
+  return a;
+}
+
+void PermutohedralLattice::Filter(const float* in, float* out, int stride, bool accumulate,
+                                  ThreadPool* pool) {
+  MOSLAM_CHECK_EQ(stride, PaddedStride(stride));
+  const simd::Kernels& kernels = simd::Active();
+  const simd::LatticeArrays a = Arrays();
   const int d1 = dim_ + 1;
   const int64_t m = num_vertices_;
-  const int64_t n = num_points_;
   const size_t rows = static_cast<size_t>(m + 1) + shared_vertices_.size() * kSplatChunks;
-  values_.assign(rows * S, 0.0f);
-  scratch_.resize(static_cast<size_t>(m + 1) * S);
-  std::fill_n(&scratch_[static_cast<size_t>(m) * S], S, 0.0f);
-  const auto run = [pool](int64_t count, const auto& fn) {
+  values_.assign(rows * stride, 0.0f);
+  scratch_.resize(static_cast<size_t>(m + 1) * stride);
+  std::fill_n(&scratch_[static_cast<size_t>(m) * stride], stride, 0.0f);
+  const auto run = [pool](int64_t count, const std::function<void(int64_t, int64_t)>& fn) {
     if (pool != nullptr) {
       pool->ParallelFor(count, fn);
     } else {
-      fn(int64_t{0}, count);
+      fn(0, count);
     }
   };
-
-  // Splat: each chunk of points scatters, in point order, into its vertices' rows.
+  // Splat: each chunk of points scatters, in point order, into its vertices' rows; vertices
+  // touched by several chunks get the chunks' rows added in chunk order.
   float* values = values_.data();
-  run(kSplatChunks, [&](int64_t chunk_begin, int64_t chunk_end) {
-    for (int64_t c = chunk_begin; c < chunk_end; ++c) {
-      DispatchPoints(dim_, [&](auto d1) {
-        SplatRange<decltype(d1)::value, S>(in, values, c, n * c / kSplatChunks,
-                                           n * (c + 1) / kSplatChunks);
-      });
+  run(kSplatChunks, [&](int64_t begin, int64_t end) {
+    for (int64_t c = begin; c < end; ++c) {
+      kernels.splat(a, in, values, stride, c, ChunkBegin(c), ChunkBegin(c + 1));
     }
   });
-  // Vertices touched by several chunks: add the chunks' rows in chunk order.
-  run(static_cast<int64_t>(shared_vertices_.size()), [&](int64_t begin, int64_t end) {
-    for (int64_t i = begin; i < end; ++i) {
-      const uint32_t v = shared_vertices_[i];
-      const float* part = values + static_cast<size_t>(splat_row_[v]) * S;
-      float* sum = values + static_cast<size_t>(v) * S;
-      std::copy(part, part + S, sum);
-      for (int c = 1; c < kSplatChunks; ++c) AddScaled<S>(sum, 1.0f, part + c * S);
-    }
-  });
-
+  run(static_cast<int64_t>(shared_vertices_.size()),
+      [&](int64_t begin, int64_t end) { kernels.merge(a, values, stride, begin, end); });
   // Blur along each lattice direction in turn.
   float* src = values_.data();
   float* dst = scratch_.data();
   for (int j = 0; j < d1; ++j) {
     const uint32_t* nb = &neighbours_[static_cast<size_t>(j) * m * 2];
-    run(m, [&](int64_t begin, int64_t end) {
-      for (int64_t v = begin; v < end; ++v) {
-        const float* a = src + v * S;
-        const float* n1 = src + static_cast<size_t>(nb[2 * v]) * S;
-        const float* n2 = src + static_cast<size_t>(nb[2 * v + 1]) * S;
-        float* o = dst + v * S;
-        if constexpr (S % 4 == 0) {
-          for (int s = 0; s < S; s += 4) {
-            Store4(o + s, Load4(a + s) + 0.5f * (Load4(n1 + s) + Load4(n2 + s)));
-          }
-        } else {
-          for (int s = 0; s < S; ++s) o[s] = a[s] + 0.5f * (n1[s] + n2[s]);
-        }
-      }
-    });
+    run(m, [&](int64_t begin, int64_t end) { kernels.blur(src, dst, nb, stride, begin, end); });
     std::swap(src, dst);
   }
-
   // Slice: every point reads its simplex's vertices.
-  run(n, [&](int64_t begin, int64_t end) {
-    DispatchPoints(dim_, [&](auto d1) {
-      SliceRange<decltype(d1)::value, S>(src, out, accumulate, begin, end);
-    });
+  run(num_points_, [&](int64_t begin, int64_t end) {
+    kernels.slice(a, src, out, stride, accumulate, begin, end);
   });
-}
-
-template <int D1, int S>
-void PermutohedralLattice::SplatRange(const float* in, float* values, int64_t chunk, int64_t begin,
-                                      int64_t end) const {
-  const int d1 = D1 > 0 ? D1 : dim_ + 1;
-  const auto m = static_cast<uint32_t>(num_vertices_);
-  for (int64_t p = begin; p < end; ++p) {
-    const uint32_t* vertices = &point_vertex_[static_cast<size_t>(p) * d1];
-    if (vertices[0] == m) continue;  // inactive
-    const float* weights = &point_weight_[static_cast<size_t>(p) * d1];
-    alignas(16) float x[S];
-    const float scale = splat_scale_[p];
-    for (int s = 0; s < S; ++s) x[s] = in[p * S + s] * scale;
-    for (int k = 0; k < d1; ++k) {
-      const uint32_t v = vertices[k];
-      const uint32_t row = splat_row_[v] + static_cast<uint32_t>(chunk) * splat_step_[v];
-      AddScaled<S>(values + static_cast<size_t>(row) * S, weights[k], x);
-    }
-  }
-}
-
-template <int D1, int S>
-void PermutohedralLattice::SliceRange(const float* values, float* out, bool accumulate,
-                                      int64_t begin, int64_t end) const {
-  const int d1 = D1 > 0 ? D1 : dim_ + 1;
-  for (int64_t p = begin; p < end; ++p) {
-    const uint32_t* vertices = &point_vertex_[static_cast<size_t>(p) * d1];
-    const float* weights = &point_weight_[static_cast<size_t>(p) * d1];
-    const float scale = slice_scale_[p];
-    float* o = out + p * S;
-    if constexpr (S % 4 == 0) {
-      F4 acc[S / 4] = {};
-      for (int k = 0; k < d1; ++k) {
-        const float w = weights[k];
-        const float* row = values + static_cast<size_t>(vertices[k]) * S;
-        for (int j = 0; j < S / 4; ++j) acc[j] += w * Load4(row + 4 * j);
-      }
-      for (int j = 0; j < S / 4; ++j) {
-        const F4 add = acc[j] * scale;
-        Store4(o + 4 * j, accumulate ? Load4(o + 4 * j) + add : add);
-      }
-    } else {
-      float acc[S] = {};
-      for (int k = 0; k < d1; ++k) {
-        const float w = weights[k];
-        const float* row = values + static_cast<size_t>(vertices[k]) * S;
-        for (int s = 0; s < S; ++s) acc[s] += w * row[s];
-      }
-      for (int s = 0; s < S; ++s) o[s] = (accumulate ? o[s] : 0.0f) + acc[s] * scale;
-    }
-  }
-}
-
-void PermutohedralLattice::Filter(const float* in, float* out, int stride, bool accumulate,
-                                  ThreadPool* pool) {
-  switch (stride) {
-    case 1:
-      return FilterImpl<1>(in, out, accumulate, pool);
-    case 2:
-      return FilterImpl<2>(in, out, accumulate, pool);
-    case 4:
-      return FilterImpl<4>(in, out, accumulate, pool);
-    case 8:
-      return FilterImpl<8>(in, out, accumulate, pool);
-    case 12:
-      return FilterImpl<12>(in, out, accumulate, pool);
-    case 16:
-      return FilterImpl<16>(in, out, accumulate, pool);
-    case 20:
-      return FilterImpl<20>(in, out, accumulate, pool);
-    case 24:
-      return FilterImpl<24>(in, out, accumulate, pool);
-    case 28:
-      return FilterImpl<28>(in, out, accumulate, pool);
-    case 32:
-      return FilterImpl<32>(in, out, accumulate, pool);
-    default:
-      MOSLAM_CHECK(false) << "unsupported stride " << stride;
-  }
 }
 
 }  // namespace moslam::semantic

@@ -26,6 +26,9 @@
 namespace moslam::semantic {
 
 class ThreadPool;
+namespace simd {
+struct LatticeArrays;
+}
 
 class PermutohedralLattice {
  public:
@@ -87,14 +90,8 @@ class PermutohedralLattice {
     return static_cast<size_t>(static_cast<int64_t>(num_points_) * c / kSplatChunks);
   }
   void BuildSplatRows(const std::vector<uint8_t>& chunk_masks);
-  template <int S>
-  void FilterImpl(const float* in, float* out, bool accumulate, ThreadPool* pool);
-  // D1: the simplex size d + 1, or 0 to read it at run time.
-  template <int D1, int S>
-  void SplatRange(const float* in, float* values, int64_t chunk, int64_t begin, int64_t end) const;
-  template <int D1, int S>
-  void SliceRange(const float* values, float* out, bool accumulate, int64_t begin,
-                  int64_t end) const;
+  // The arrays the filter loops (crf_simd.h) read.
+  simd::LatticeArrays Arrays() const;
 
   static constexpr int kSplatChunks = 4;
 
