@@ -28,7 +28,7 @@ bool IsValidDepth(float z) { return std::isfinite(z) && z > 0.0f; }
 // Feature rows of a bilateral kernel (see dense_crf.h), divided by their standard deviations,
 // and for the depth kernel the pixels that take part (active stays empty otherwise).
 int MakeFeatures(KernelKind kind, const cv::Mat& image, const cv::Mat& depth_m,
-                 const DenseCrfOptions& o, std::vector<float>* features,
+                 const DenseCrfOptions& o, ThreadPool* pool, std::vector<float>* features,
                  std::vector<uint8_t>* active) {
   const int rows = image.rows;
   const int cols = image.cols;
@@ -48,24 +48,27 @@ int MakeFeatures(KernelKind kind, const cv::Mat& image, const cv::Mat& depth_m,
   const float inv_sxy = 1.0f / sxy;
   const float inv_srgb = 1.0f / o.appearance_srgb;
   const float inv_sd = 1.0f / o.depth_sd_m;
-  float* f = features->data();
-  for (int y = 0; y < rows; ++y) {
-    const uint8_t* pixel = image.ptr<uint8_t>(y);
-    const float* z = kind == KernelKind::kDepth ? depth_m.ptr<float>(y) : nullptr;
-    for (int x = 0; x < cols; ++x, f += dim) {
-      f[0] = static_cast<float>(x) * inv_sxy;
-      f[1] = static_cast<float>(y) * inv_sxy;
-      if (kind == KernelKind::kAppearance) {
-        for (int c = 0; c < channels; ++c) {
-          f[2 + c] = static_cast<float>(pixel[x * channels + c]) * inv_srgb;
+  pool->ParallelFor(rows, [&](int64_t begin, int64_t end) {
+    for (int64_t y = begin; y < end; ++y) {
+      const uint8_t* pixel = image.ptr<uint8_t>(static_cast<int>(y));
+      const float* z =
+          kind == KernelKind::kDepth ? depth_m.ptr<float>(static_cast<int>(y)) : nullptr;
+      float* f = features->data() + y * cols * dim;
+      for (int x = 0; x < cols; ++x, f += dim) {
+        f[0] = static_cast<float>(x) * inv_sxy;
+        f[1] = static_cast<float>(y) * inv_sxy;
+        if (kind == KernelKind::kAppearance) {
+          for (int c = 0; c < channels; ++c) {
+            f[2 + c] = static_cast<float>(pixel[x * channels + c]) * inv_srgb;
+          }
+        } else if (kind == KernelKind::kDepth) {
+          const bool valid = IsValidDepth(z[x]);
+          (*active)[y * cols + x] = valid ? 1 : 0;
+          f[2] = valid ? z[x] * inv_sd : 0.0f;
         }
-      } else if (kind == KernelKind::kDepth) {
-        const bool valid = IsValidDepth(z[x]);
-        (*active)[static_cast<size_t>(y) * cols + x] = valid ? 1 : 0;
-        f[2] = valid ? z[x] * inv_sd : 0.0f;
       }
     }
-  }
+  });
   return dim;
 }
 
@@ -131,7 +134,8 @@ void DenseCrf::PrepareKernels(const cv::Mat& image, const cv::Mat& depth_m, int 
   const int n = static_cast<int>(image.total());
   w.kernels.clear();
   const auto add_lattice = [&](KernelKind kind, float weight) {
-    const int dim = MakeFeatures(kind, image, depth_m, options_, &w.features, &w.active);
+    const int dim =
+        MakeFeatures(kind, image, depth_m, options_, pool_.get(), &w.features, &w.active);
     auto kernel = std::make_unique<LatticeKernel>();
     kernel->Prepare(w.features.data(), n, dim, w.active.empty() ? nullptr : w.active.data(), weight,
                     pool_.get());

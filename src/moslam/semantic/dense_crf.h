@@ -12,7 +12,10 @@
 // D^-1/2 K D^-1/2 with D = diag(K 1), and includes the j = i term; the mean-field update is
 //   Q_i(l) ~ exp(-U_i(l) - sum_l' mu(l, l') sum_m w_m (D^-1/2 K_m D^-1/2 Q)_i(l')).
 // Kernels are filtered with the permutohedral lattice (permutohedral_lattice.h), built once per
-// image and per kernel; all labels are filtered in one pass.
+// image and per kernel, or, for the smoothness kernel with few labels, with an exact separable
+// Gaussian blur (crf_kernels.h). All labels travel through a filter together, and only L - 1 of
+// them: the last label's message follows from linearity, since the Q(l) sum to 1. Results are
+// bit-identical for any number of threads (see crf_simd.h for the instruction sets).
 //
 // Pixels whose depth is invalid (0, negative or not finite) take no part in the depth kernel:
 // they neither pull their neighbours nor are pulled through it; the other kernels still apply.

@@ -453,9 +453,6 @@ void PermutohedralLattice::Filter(const float* in, float* out, int stride, bool 
   const int d1 = dim_ + 1;
   const int64_t m = num_vertices_;
   const size_t rows = static_cast<size_t>(m + 1) + shared_vertices_.size() * kSplatChunks;
-  values_.assign(rows * stride, 0.0f);
-  scratch_.resize(static_cast<size_t>(m + 1) * stride);
-  std::fill_n(&scratch_[static_cast<size_t>(m) * stride], stride, 0.0f);
   const auto run = [pool](int64_t count, const std::function<void(int64_t, int64_t)>& fn) {
     if (pool != nullptr) {
       pool->ParallelFor(count, fn);
@@ -463,6 +460,12 @@ void PermutohedralLattice::Filter(const float* in, float* out, int stride, bool 
       fn(0, count);
     }
   };
+  values_.resize(rows * stride);
+  run(static_cast<int64_t>(rows), [&](int64_t begin, int64_t end) {
+    std::fill(values_.begin() + begin * stride, values_.begin() + end * stride, 0.0f);
+  });
+  scratch_.resize(static_cast<size_t>(m + 1) * stride);
+  std::fill_n(&scratch_[static_cast<size_t>(m) * stride], stride, 0.0f);
   // Splat: each chunk of points scatters, in point order, into its vertices' rows; vertices
   // touched by several chunks get the chunks' rows added in chunk order.
   float* values = values_.data();

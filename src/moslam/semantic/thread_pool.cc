@@ -78,17 +78,4 @@ void ThreadPool::ParallelFor(int64_t n, const std::function<void(int64_t, int64_
   }
 }
 
-void ThreadPool::RunTasks(const std::vector<std::function<void()>>& tasks) {
-  const int64_t threads = num_threads();
-  ParallelFor(std::min<int64_t>(threads, static_cast<int64_t>(tasks.size())),
-              [&](int64_t begin, int64_t end) {
-                for (int64_t slot = begin; slot < end; ++slot) {
-                  for (size_t i = static_cast<size_t>(slot); i < tasks.size();
-                       i += static_cast<size_t>(threads)) {
-                    tasks[i]();
-                  }
-                }
-              });
-}
-
 }  // namespace moslam::semantic

@@ -27,8 +27,6 @@ class ThreadPool {
   // when all have finished; an exception thrown by fn is rethrown then (the first range's
   // first). Not reentrant: fn must not call the pool.
   void ParallelFor(int64_t n, const std::function<void(int64_t, int64_t)>& fn);
-  // Runs each task once, spread over the threads (task i on thread i % num_threads()).
-  void RunTasks(const std::vector<std::function<void()>>& tasks);
 
  private:
   // Runs job_ for thread slot `slot` (0 is the caller).
