@@ -149,7 +149,18 @@ struct Sample {
   cv::Mat labelled;  // not Unlabelled
 };
 
-Sample LoadSample(const Entry& entry, cv::dnn::Net& net, double* network_ms) {
+// Planes averaged over blocks of `factor` pixels and interpolated back: the blurry, blocky
+// probabilities of a coarser network (or of class activation maps, as in weak supervision).
+void Coarsen(int factor, cv::Mat* probs) {
+  for (int c = 0; c < probs->size[0]; ++c) {
+    cv::Mat plane = moslam::semantic::LabelPlane(*probs, c);
+    cv::Mat small;
+    cv::resize(plane, small, cv::Size(), 1.0 / factor, 1.0 / factor, cv::INTER_AREA);
+    cv::resize(small, plane, plane.size(), 0, 0, cv::INTER_LINEAR);
+  }
+}
+
+Sample LoadSample(const Entry& entry, cv::dnn::Net& net, int coarse, double* network_ms) {
   Sample s;
   s.name = std::filesystem::path(entry.image).stem().string();
   s.image = cv::imread(entry.image, cv::IMREAD_COLOR);
@@ -163,6 +174,7 @@ Sample LoadSample(const Entry& entry, cv::dnn::Net& net, double* network_ms) {
   net.setInput(cv::dnn::blobFromImage(s.image, 1.0 / 127.5, cv::Size(kNetworkSize, kNetworkSize),
                                       cv::Scalar(127.5, 127.5, 127.5), /*swapRB=*/true));
   s.probs = Probabilities(net.forward(), s.image.size());
+  if (coarse > 1) Coarsen(coarse, &s.probs);
   *network_ms +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   s.truth = (annotation >= 8) & (annotation <= 10);
@@ -284,6 +296,7 @@ int main(int argc, char** argv) {
   int overlay_every = 20;
   int threads = 2;
   int tune = 0;
+  int coarse = 1;
   std::string log_level = "info";
   app.add_option("--camvid", camvid, "CamVid folder (SegNet layout)")->capture_default_str();
   app.add_option("--split", split, "List to evaluate: val, train or test")->capture_default_str();
@@ -298,6 +311,10 @@ int main(int argc, char** argv) {
   app.add_option("--tune", tune,
                  "Instead of evaluating, try a grid of appearance-kernel settings on N images "
                  "spread over the split (use the train split, then evaluate val with the best)")
+      ->capture_default_str();
+  app.add_option("--coarse", coarse,
+                 "Average the probabilities over blocks of N x N pixels first (1: off), to see "
+                 "the CRF on coarse unaries")
       ->capture_default_str();
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
@@ -318,7 +335,8 @@ int main(int argc, char** argv) {
       std::vector<Sample> samples;
       const size_t count = std::min(entries.size(), static_cast<size_t>(tune));
       for (size_t i = 0; i < count; ++i) {
-        samples.push_back(LoadSample(entries[i * entries.size() / count], net, &network_ms));
+        samples.push_back(
+            LoadSample(entries[i * entries.size() / count], net, coarse, &network_ms));
       }
       std::printf("tuning on %zu images of %s\n", samples.size(), split.c_str());
       Tune(samples, options);
@@ -329,7 +347,7 @@ int main(int argc, char** argv) {
     DenseCrf crf(options);
     Scores scores;
     for (size_t i = 0; i < entries.size(); ++i) {
-      const Sample s = LoadSample(entries[i], net, &network_ms);
+      const Sample s = LoadSample(entries[i], net, coarse, &network_ms);
       cv::Mat mask_before;
       cv::Mat mask_after;
       Score(s, crf, true, &scores, &mask_before, &mask_after);
@@ -341,8 +359,11 @@ int main(int argc, char** argv) {
                     scores.after.Value());
     }
     const double n = static_cast<double>(entries.size());
-    std::printf("CamVid %s, %zu images, binary movable IoU (accumulated over the split)\n",
-                split.c_str(), entries.size());
+    std::printf("CamVid %s, %zu images, binary movable IoU (accumulated over the split)%s\n",
+                split.c_str(), entries.size(),
+                coarse > 1
+                    ? fmt::format(", probabilities averaged over {0}x{0} blocks", coarse).c_str()
+                    : "");
     std::printf(
         "  ignoring Unlabelled pixels: DeepLab %.4f, + CRF (21 labels) %.4f, "
         "+ CRF (2 labels) %.4f\n",

@@ -141,7 +141,8 @@ void DenseCrf::PrepareKernels(const cv::Mat& image, const cv::Mat& depth_m, int 
                     pool_.get());
     w.kernels.push_back(std::move(kernel));
   };
-  if (options_.smoothness) {
+  // A kernel of weight 0 changes nothing: skip it.
+  if (options_.smoothness && options_.smoothness_weight > 0.0f) {
     const bool separable = options_.smoothness_filter == "separable" ||
                            (options_.smoothness_filter == "auto" &&
                             SeparableGaussianKernel::Preferred(options_.smoothness_sxy, channels));
@@ -153,8 +154,12 @@ void DenseCrf::PrepareKernels(const cv::Mat& image, const cv::Mat& depth_m, int 
       add_lattice(KernelKind::kSmoothness, options_.smoothness_weight);
     }
   }
-  if (options_.appearance) add_lattice(KernelKind::kAppearance, options_.appearance_weight);
-  if (options_.depth) add_lattice(KernelKind::kDepth, options_.depth_weight);
+  if (options_.appearance && options_.appearance_weight > 0.0f) {
+    add_lattice(KernelKind::kAppearance, options_.appearance_weight);
+  }
+  if (options_.depth && options_.depth_weight > 0.0f) {
+    add_lattice(KernelKind::kDepth, options_.depth_weight);
+  }
 }
 
 CrfResult DenseCrf::Infer(const cv::Mat& image, const cv::Mat& depth_m, const Unaries& unaries) {
