@@ -111,7 +111,12 @@ void CheckInputs(const cv::Mat& image, const cv::Mat& depth_m, const Unaries& un
 }  // namespace
 
 struct DenseCrf::Workspace {
-  std::vector<std::unique_ptr<PairwiseKernel>> kernels;
+  // Kernel objects live as long as the DenseCrf so that their buffers are reused from image to
+  // image (fresh allocations of this size cost page faults on every image); `kernels` lists the
+  // ones in use for the current image.
+  LatticeKernel lattices[3];  // indexed by KernelKind
+  SeparableGaussianKernel separable;
+  std::vector<PairwiseKernel*> kernels;
   std::vector<float> features;
   std::vector<uint8_t> active;
   std::vector<float> energies;      // tiles of pixels x L labels (crf_simd.h)
@@ -136,10 +141,10 @@ void DenseCrf::PrepareKernels(const cv::Mat& image, const cv::Mat& depth_m, int 
   const auto add_lattice = [&](KernelKind kind, float weight) {
     const int dim =
         MakeFeatures(kind, image, depth_m, options_, pool_.get(), &w.features, &w.active);
-    auto kernel = std::make_unique<LatticeKernel>();
-    kernel->Prepare(w.features.data(), n, dim, w.active.empty() ? nullptr : w.active.data(), weight,
-                    pool_.get());
-    w.kernels.push_back(std::move(kernel));
+    LatticeKernel& kernel = w.lattices[static_cast<int>(kind)];
+    kernel.Prepare(w.features.data(), n, dim, w.active.empty() ? nullptr : w.active.data(), weight,
+                   pool_.get());
+    w.kernels.push_back(&kernel);
   };
   // A kernel of weight 0 changes nothing: skip it.
   if (options_.smoothness && options_.smoothness_weight > 0.0f) {
@@ -147,9 +152,8 @@ void DenseCrf::PrepareKernels(const cv::Mat& image, const cv::Mat& depth_m, int 
                            (options_.smoothness_filter == "auto" &&
                             SeparableGaussianKernel::Preferred(options_.smoothness_sxy, channels));
     if (separable) {
-      auto kernel = std::make_unique<SeparableGaussianKernel>();
-      kernel->Prepare(image.size(), options_.smoothness_sxy, options_.smoothness_weight);
-      w.kernels.push_back(std::move(kernel));
+      w.separable.Prepare(image.size(), options_.smoothness_sxy, options_.smoothness_weight);
+      w.kernels.push_back(&w.separable);
     } else {
       add_lattice(KernelKind::kSmoothness, options_.smoothness_weight);
     }
@@ -205,7 +209,7 @@ void DenseCrf::Infer(const cv::Mat& image, const cv::Mat& depth_m, const Unaries
 
   PrepareKernels(img, depth_m, labels - 1);
   w.ones_message.assign(static_cast<size_t>(n), 0.0f);
-  for (const auto& kernel : w.kernels) {
+  for (const PairwiseKernel* kernel : w.kernels) {
     const std::vector<float>& ones = kernel->filtered_ones();
     for (int64_t p = 0; p < n; ++p) w.ones_message[p] += ones[p];
   }

@@ -4,6 +4,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -210,6 +211,37 @@ TEST(DenseCrf, OutputDoesNotDependOnTheNumberOfThreads) {
       const cv::Mat b = results[i].marginals.reshape(1, 1);
       EXPECT_EQ(cv::countNonZero(a != b), 0) << labels << " labels";
       EXPECT_EQ(cv::countNonZero(results[0].labels != results[i].labels), 0);
+    }
+  }
+}
+
+TEST(DenseCrf, ReusedObjectGivesTheResultsOfFreshOnes) {
+  // A DenseCrf keeps its buffers between images: sizes, label counts and kernels may change.
+  DenseCrfOptions o;
+  o.depth = true;
+  DenseCrf crf(o);
+  struct Input {
+    cv::Mat image;
+    cv::Mat depth;
+    cv::Mat probs;
+  };
+  std::vector<Input> inputs;
+  for (const auto& [rows, cols, labels] :
+       {std::tuple{40, 50, 3}, std::tuple{23, 71, 21}, std::tuple{40, 50, 2}}) {
+    cv::Mat depth(rows, cols, CV_32F);
+    cv::randu(depth, 0.5, 3.0);
+    inputs.push_back({TwoRegionImage(rows, cols, 11), depth,
+                      RandomProbabilities(labels, rows, cols, static_cast<uint32_t>(labels))});
+  }
+  CrfResult reused;
+  for (int round = 0; round < 2; ++round) {
+    for (const Input& in : inputs) {
+      crf.Infer(in.image, in.depth, Unaries::FromProbabilities(in.probs), &reused);
+      const CrfResult fresh =
+          InferDenseCrf(in.image, in.depth, Unaries::FromProbabilities(in.probs), o);
+      EXPECT_EQ(cv::countNonZero(reused.marginals.reshape(1, 1) != fresh.marginals.reshape(1, 1)),
+                0);
+      EXPECT_EQ(cv::countNonZero(reused.labels != fresh.labels), 0);
     }
   }
 }

@@ -158,7 +158,10 @@ auto DispatchDim(int dim, F&& f) {
 // probe is one cache access; vertex numbers follow insertion order (deterministic).
 class PermutohedralLattice::HashTable {
  public:
-  HashTable(std::vector<Key>* keys, size_t expected) : keys_(keys) {
+  // Empties *keys and the table, keeping their memory.
+  void Reset(std::vector<Key>* keys, size_t expected) {
+    keys_ = keys;
+    keys_->clear();
     size_t capacity = 1024;
     while (capacity < 2 * expected) capacity *= 2;
     Resize(capacity);
@@ -212,11 +215,18 @@ class PermutohedralLattice::HashTable {
     }
   }
 
-  std::vector<Key>* keys_;
+  std::vector<Key>* keys_ = nullptr;
   std::vector<Key> slot_keys_;
   std::vector<int32_t> slot_index_;
   size_t mask_ = 0;
 };
+
+PermutohedralLattice::PermutohedralLattice()
+    : table_(std::make_unique<HashTable>()),
+      chunk_tables_(std::make_unique<HashTable[]>(kSplatChunks)) {}
+PermutohedralLattice::~PermutohedralLattice() = default;
+PermutohedralLattice::PermutohedralLattice(PermutohedralLattice&&) noexcept = default;
+PermutohedralLattice& PermutohedralLattice::operator=(PermutohedralLattice&&) noexcept = default;
 
 int PermutohedralLattice::PaddedStride(int channels) {
   MOSLAM_CHECK(channels >= 1 && channels <= kMaxStride) << "channels " << channels;
@@ -249,20 +259,20 @@ void PermutohedralLattice::Build(const float* features, int num_points, int dim,
   };
 
   // 1. Each chunk of points embeds its points and numbers their vertices in a table of its own.
-  std::vector<Key> chunk_keys[kSplatChunks];
+  std::vector<Key>* chunk_keys = chunk_keys_;
   run(kSplatChunks, [&](int64_t begin, int64_t end) {
     for (int64_t c = begin; c < end; ++c) {
       DispatchDim(dim, [&](auto d) {
         EmbedChunk<decltype(d)::value>(features, active, ChunkBegin(c), ChunkBegin(c + 1),
-                                       &chunk_keys[c]);
+                                       &chunk_tables_[c], &chunk_keys[c]);
         return 0;
       });
     }
   });
   // 2. One table for all: chunk by chunk, in order, so the numbering is the same whatever the
   // threads (the filter's sums do not depend on the numbering anyway).
-  keys_.clear();
-  HashTable table(&keys_, chunk_keys[0].size() * 2);
+  HashTable& table = *table_;
+  table.Reset(&keys_, chunk_keys[0].size() * 2);
   std::vector<uint32_t> to_global[kSplatChunks];
   std::vector<uint8_t> chunk_masks;
   for (int c = 0; c < kSplatChunks; ++c) {
@@ -294,12 +304,12 @@ void PermutohedralLattice::Build(const float* features, int num_points, int dim,
 
 template <int D>
 void PermutohedralLattice::EmbedChunk(const float* features, const uint8_t* active, size_t begin,
-                                      size_t end, std::vector<Key>* keys) {
+                                      size_t end, HashTable* chunk_table, std::vector<Key>* keys) {
   constexpr int kD1 = D + 1;
   float scale[D];
   FeatureScales(D, scale);
-  keys->clear();
-  HashTable table(keys, (end - begin) / 8 + 16);
+  HashTable& table = *chunk_table;
+  table.Reset(keys, (end - begin) / 8 + 16);
   // Packed offsets: +1 on every stored coordinate, and d + 1 on one of them.
   Key ones;
   Key unit[D];

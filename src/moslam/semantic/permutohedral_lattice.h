@@ -21,6 +21,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace moslam::semantic {
@@ -36,6 +37,11 @@ class PermutohedralLattice {
   static constexpr int kMaxDim = 6;
   // Largest row stride Filter accepts; rows are padded to kStrides (see PaddedStride).
   static constexpr int kMaxStride = 32;
+
+  PermutohedralLattice();
+  ~PermutohedralLattice();
+  PermutohedralLattice(PermutohedralLattice&&) noexcept;
+  PermutohedralLattice& operator=(PermutohedralLattice&&) noexcept;
 
   // The smallest supported row stride >= channels: 1, 2, 4, then multiples of 4 up to 32.
   static int PaddedStride(int channels);
@@ -83,7 +89,7 @@ class PermutohedralLattice {
   // keys end up in *keys (inactive points get ~0).
   template <int D>
   void EmbedChunk(const float* features, const uint8_t* active, size_t begin, size_t end,
-                  std::vector<Key>* keys);
+                  HashTable* chunk_table, std::vector<Key>* keys);
   void BuildNeighbours(const HashTable& table, ThreadPool* pool);
   // First point of splat chunk c (c = kSplatChunks: num_points).
   size_t ChunkBegin(int64_t c) const {
@@ -99,6 +105,10 @@ class PermutohedralLattice {
   int num_points_ = 0;
   int num_vertices_ = 0;
   std::vector<Key> keys_;  // Per vertex, its packed lattice coordinates.
+  // Hash tables and vertex keys of the build, kept to reuse their memory.
+  std::unique_ptr<HashTable> table_;
+  std::unique_ptr<HashTable[]> chunk_tables_;
+  std::vector<Key> chunk_keys_[kSplatChunks];
   // Per point, d + 1 vertices and barycentric weights (inactive points: vertex M, weight 0).
   std::vector<uint32_t> point_vertex_;
   std::vector<float> point_weight_;
