@@ -316,7 +316,10 @@ TEST(DenseCrf, UnaryFormsAndLayoutsAgree) {
   ExpectValidResult(from_probs, "probabilities");
   // Energies -log(max(p, min_probability)).
   cv::Mat energies = probs.clone();
-  energies.forEach<float>([&](float& v, const int*) { v = -std::log(std::max(v, 1e-5f)); });
+  for (size_t i = 0; i < energies.total(); ++i) {
+    float& v = energies.ptr<float>()[i];
+    v = -std::log(std::max(v, 1e-5f));
+  }
   const CrfResult from_energies =
       InferDenseCrf(image, cv::Mat(), Unaries::FromEnergies(energies), o);
   double worst = 0.0;
