@@ -8,5 +8,6 @@ namespace moslam::app {
 
 void AddEvalCommand(CLI::App& app);
 void AddDatasetCommand(CLI::App& app);
+void AddCrfCommand(CLI::App& app);
 
 }  // namespace moslam::app

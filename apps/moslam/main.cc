@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   app.parse_complete_callback([&] { moslam::SetupLogging(log_level); });
 
   moslam::app::AddEvalCommand(app);
+  moslam::app::AddCrfCommand(app);
 
   try {
     app.parse(argc, argv);
