@@ -9,5 +9,6 @@ namespace moslam::app {
 void AddEvalCommand(CLI::App& app);
 void AddDatasetCommand(CLI::App& app);
 void AddFeaturesCommand(CLI::App& app);
+void AddCrfCommand(CLI::App& app);
 
 }  // namespace moslam::app

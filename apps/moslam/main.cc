@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   moslam::app::AddEvalCommand(app);
   moslam::app::AddDatasetCommand(app);
   moslam::app::AddFeaturesCommand(app);
+  moslam::app::AddCrfCommand(app);
 
   try {
     app.parse(argc, argv);
