@@ -1,4 +1,5 @@
 #include "moslam/camera/pinhole_camera.h"
+#include "moslam/testing/error_of.h"
 
 #include <functional>
 #include <limits>
@@ -38,16 +39,7 @@ PinholeOptions Ideal() {
   return o;
 }
 
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected InputError";
-  return {};
-}
+using ::moslam::testing::ErrorOf;
 
 TEST(PinholeOptions, ValidOptionsPass) {
   EXPECT_NO_THROW(EurocCam0().Check());

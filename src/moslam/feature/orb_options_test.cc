@@ -1,4 +1,5 @@
 #include "moslam/feature/orb_options.h"
+#include "moslam/testing/error_of.h"
 
 #include <functional>
 #include <string>
@@ -16,16 +17,7 @@ namespace {
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected InputError";
-  return {};
-}
+using ::moslam::testing::ErrorOf;
 
 TEST(OrbExtractorOptions, DefaultsAreOrbSlam2sAndValid) {
   const OrbExtractorOptions options;

@@ -10,22 +10,13 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "moslam/testing/error_of.h"
 #include "moslam/testing/shared_data.h"
 #include "moslam/util/error.h"
 
 namespace moslam::io::test {
 
-// Runs `f` and returns the InputError's message, or fails the test.
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected InputError";
-  return {};
-}
+using ::moslam::testing::ErrorOf;
 
 // Writes a `cols` x `rows` image of `type` filled with `value` to dir/name; returns its path.
 inline std::string WriteImage(const testing::TempDir& dir, const std::string& name, int cols,

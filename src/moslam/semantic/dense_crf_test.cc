@@ -1,4 +1,5 @@
 #include "moslam/semantic/dense_crf.h"
+#include "moslam/testing/error_of.h"
 
 #include <cmath>
 #include <limits>
@@ -384,16 +385,7 @@ TEST(DenseCrf, CompatibilityMatrix) {
 // ---------------------------------------------------------------------------------------------
 // Options and input errors.
 
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected InputError";
-  return {};
-}
+using ::moslam::testing::ErrorOf;
 
 TEST(DenseCrfOptions, DefaultsAreValidAndBadValuesAreNamed) {
   EXPECT_NO_THROW(DenseCrfOptions().Check());

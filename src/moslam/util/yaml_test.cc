@@ -1,4 +1,5 @@
 #include "moslam/util/yaml.h"
+#include "moslam/testing/error_of.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -12,17 +13,7 @@ namespace {
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 
-// Runs `f` and returns the InputError message, or fails the test.
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected InputError";
-  return {};
-}
+using ::moslam::testing::ErrorOf;
 
 TEST(YamlFile, ReadsFlatOpenCvStyleAndNestedKeys) {
   testing::TempDir dir;
