@@ -176,7 +176,19 @@ Trajectory ReadTrajectory(const std::string& path, TrajectoryFormat format) {
   ThrowInFile(path, "no trajectory format");
 }
 
-Trajectory ReadTum(const std::string& path) {
+namespace {
+
+// The field layout of a text trajectory with one stamped pose per line (TUM, EuRoC).
+struct StampedLayout {
+  bool exact_count;         // exactly 8 fields (TUM) or at least 8 (EuRoC has velocities after)
+  const char* fields_text;  // for the error message
+  bool w_first;             // quaternion stored w, x, y, z (EuRoC) instead of x, y, z, w (TUM)
+  double stamp_divisor;     // stamp units per second; a division, as evo converts nanoseconds
+};
+
+// Reads `path` line by line: NaN lines and all-zero quaternions are skipped and reported once,
+// as TUM's tools do; the rest go through AddStampedPose's ordering rule.
+Trajectory ReadStamped(const std::string& path, const StampedLayout& layout) {
   Trajectory out;
   out.name = path;
   Skips skips;
@@ -184,10 +196,10 @@ Trajectory ReadTum(const std::string& path) {
   int repeats = 0;
   for (const TextLine& line : ReadDataLines(path)) {
     const std::vector<double> v = ParseNumbers(path, line, /*commas=*/true);
-    if (v.size() != 8) {
-      ThrowAtLine(
-          path, line.number,
-          fmt::format("expected 8 fields (timestamp tx ty tz qx qy qz qw), found {}", v.size()));
+    if (layout.exact_count ? v.size() != 8 : v.size() < 8) {
+      ThrowAtLine(path, line.number,
+                  fmt::format("expected {}8 fields ({}), found {}",
+                              layout.exact_count ? "" : "at least ", layout.fields_text, v.size()));
     }
     if (AnyNan(v)) {
       if (skips.nan_lines++ == 0) skips.first_nan_line = line.number;
@@ -197,41 +209,23 @@ Trajectory ReadTum(const std::string& path) {
       if (skips.zero_quaternions++ == 0) skips.first_zero_line = line.number;
       continue;
     }
-    AddStampedPose(path, line, v[0], {v[1], v[2], v[3]}, Eigen::Quaterniond(v[7], v[4], v[5], v[6]),
-                   &previous_line, &repeats, &out);
+    const Eigen::Quaterniond q = layout.w_first ? Eigen::Quaterniond(v[4], v[5], v[6], v[7])
+                                                : Eigen::Quaterniond(v[7], v[4], v[5], v[6]);
+    AddStampedPose(path, line, v[0] / layout.stamp_divisor, {v[1], v[2], v[3]}, q, &previous_line,
+                   &repeats, &out);
   }
   skips.Report(path);
   return out;
 }
 
+}  // namespace
+
+Trajectory ReadTum(const std::string& path) {
+  return ReadStamped(path, {true, "timestamp tx ty tz qx qy qz qw", false, 1.0});
+}
+
 Trajectory ReadEuroc(const std::string& path) {
-  Trajectory out;
-  out.name = path;
-  Skips skips;
-  int previous_line = 0;
-  int repeats = 0;
-  for (const TextLine& line : ReadDataLines(path)) {
-    const std::vector<double> v = ParseNumbers(path, line, /*commas=*/true);
-    if (v.size() < 8) {
-      ThrowAtLine(path, line.number,
-                  fmt::format("expected at least 8 fields (timestamp_ns, p_x, p_y, p_z, q_w, q_x, "
-                              "q_y, q_z), found {}",
-                              v.size()));
-    }
-    if (AnyNan(v)) {
-      if (skips.nan_lines++ == 0) skips.first_nan_line = line.number;
-      continue;
-    }
-    if (v[4] == 0 && v[5] == 0 && v[6] == 0 && v[7] == 0) {
-      if (skips.zero_quaternions++ == 0) skips.first_zero_line = line.number;
-      continue;
-    }
-    // Nanoseconds to seconds the way evo does it (a division of the parsed double).
-    AddStampedPose(path, line, v[0] / 1e9, {v[1], v[2], v[3]},
-                   Eigen::Quaterniond(v[4], v[5], v[6], v[7]), &previous_line, &repeats, &out);
-  }
-  skips.Report(path);
-  return out;
+  return ReadStamped(path, {false, "timestamp_ns, p_x, p_y, p_z, q_w, q_x, q_y, q_z", true, 1e9});
 }
 
 Trajectory ReadKitti(const std::string& path) {
