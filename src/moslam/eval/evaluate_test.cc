@@ -79,6 +79,25 @@ TEST_F(Evaluate, PlotDataIsFilled) {
   EXPECT_EQ(out.plot->title, "ATE, SE(3)-aligned: est.txt");
   // Aligned: the estimate lies on the reference.
   EXPECT_LT((out.plot->estimate[5] - out.plot->reference[5]).norm(), 1e-9);
+  EXPECT_EQ(out.plot->time_label, "time since start [s]");  // TUM files carry seconds
+}
+
+TEST_F(Evaluate, PlotOfFilesWithoutTimestampsIsOverFrames) {
+  // KITTI poses carry no timestamps: the plot's time axes count frames, not seconds.
+  const Trajectory gt = testing::MakeCurve(50);
+  request_.inputs.gt_path = dir_.path() + "/gt_kitti.txt";
+  request_.inputs.est_path = dir_.path() + "/est_kitti.txt";
+  WriteKitti(gt, request_.inputs.gt_path);
+  WriteKitti(gt, request_.inputs.est_path);
+  request_.plot_path = dir_.path() + "/ate.png";
+  const EvalOutput ate = RunEvaluation(request_);
+  ASSERT_TRUE(ate.plot.has_value());
+  EXPECT_EQ(ate.plot->time_label, "frame");
+  EXPECT_EQ(ate.plot->times.back(), 49.0);
+  request_.metric = Metric::kRpe;
+  const EvalOutput rpe = RunEvaluation(request_);
+  ASSERT_TRUE(rpe.plot.has_value());
+  EXPECT_EQ(rpe.plot->time_label, "frame");
 }
 
 TEST_F(Evaluate, BadSettingsAreInputErrors) {

@@ -22,6 +22,8 @@ struct TrajectoryPlotData {
   // times[i] (the first pose of pair i) and the top view is not coloured by it.
   std::vector<double> errors;
   std::string error_label;  // e.g. "ATE [m]" or "RPE trans. [m]"
+  // Label of the time axes: what `times` holds (KITTI files have frame indices, not seconds).
+  std::string time_label = "time since start [s]";
 };
 
 // Writes a figure to `path`; the format follows the extension: .png (raster, via OpenCV) or

@@ -32,7 +32,6 @@ constexpr double kErrorHeadingBaseline = 688.0;
 const cv::Rect2d kErrorBox(kRightX, 705, kRightWidth, 200);
 constexpr int kColourLevels = 64;  // error colours are quantized so that segments merge
 constexpr const char* kAxisNames[3] = {"x", "y", "z"};
-constexpr const char* kTimeLabel = "time since start [s]";
 
 // The input split into plain per-coordinate series, with times relative to the first pose. A
 // time gap (lost tracking: no compared poses) becomes a row of NaN so that lines break there.
@@ -256,7 +255,7 @@ void DrawTopView(Figure& figure, const Series& s, const std::string& error_label
   if (s.colour_by_error) DrawColourBar(figure, s, error_label);
 }
 
-void DrawPositions(Figure& figure, const Series& s) {
+void DrawPositions(Figure& figure, const Series& s, const std::string& time_label) {
   AddText(figure, "Position over time", {kRightX, kHeadingBaseline}, kHeadingSize, Anchor::kStart,
           kInk, true);
   DrawLegendRow(figure, kRightX + kRightWidth, kHeadingBaseline,
@@ -271,12 +270,14 @@ void DrawPositions(Figure& figure, const Series& s) {
     DrawSeries(figure, axes, s.time, s.reference[k], kReference, 3.0);
     DrawSeries(figure, axes, s.time, s.estimate[k], kEstimate, 2.0);
     const bool last = k == 2;
-    DrawFrame(figure, axes,
-              {last, true, last ? kTimeLabel : "", fmt::format("{} [m]", kAxisNames[k])});
+    DrawFrame(
+        figure, axes,
+        {last, true, last ? time_label : std::string(), fmt::format("{} [m]", kAxisNames[k])});
   }
 }
 
-void DrawErrors(Figure& figure, const Series& s, const std::string& error_label) {
+void DrawErrors(Figure& figure, const Series& s, const std::string& error_label,
+                const std::string& time_label) {
   AddText(figure, "Error over time", {kRightX, kErrorHeadingBaseline}, kHeadingSize, Anchor::kStart,
           kInk, true);
   const bool any = s.error_values.lo <= s.error_values.hi;
@@ -303,7 +304,7 @@ void DrawErrors(Figure& figure, const Series& s, const std::string& error_label)
          {fmt::format("RMSE = {}", FormatValue(s.rmse)), LegendEntry::Kind::kDashed, kInk, 2.0}},
         drawn);
   }
-  DrawFrame(figure, axes, {true, true, kTimeLabel, error_label.empty() ? "error" : error_label});
+  DrawFrame(figure, axes, {true, true, time_label, error_label.empty() ? "error" : error_label});
 }
 
 }  // namespace
@@ -317,8 +318,9 @@ Figure LayoutTrajectoryPlot(const TrajectoryPlotData& data) {
   AddText(figure, data.title.empty() ? "Trajectory" : data.title, {kWidth / 2.0, kTitleBaseline},
           kTitleSize, Anchor::kMiddle, kInk, true);
   DrawTopView(figure, s, error_label);
-  DrawPositions(figure, s);
-  DrawErrors(figure, s, error_label);
+  const std::string time_label = data.time_label.empty() ? "time" : data.time_label;
+  DrawPositions(figure, s, time_label);
+  DrawErrors(figure, s, error_label, time_label);
   return figure;
 }
 

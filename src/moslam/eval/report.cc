@@ -154,6 +154,7 @@ TrajectoryPlotData MakeAtePlotData(const AteResult& result, const Trajectory& es
   data.estimate = result.poses.est_positions;
   data.errors = rotation ? result.rotation.values : result.translation.values;
   data.error_label = rotation ? "ATE rot. [deg]" : "ATE [m]";
+  if (!est.has_timestamps()) data.time_label = "frame";
   return data;
 }
 
@@ -166,6 +167,7 @@ TrajectoryPlotData MakeRpePlotData(const RpeResult& result, const Trajectory& es
   data.estimate = result.poses.est_positions;
   data.errors = rotation ? result.rotation.values : result.translation.values;
   data.error_label = rotation ? "RPE rot. [deg]" : "RPE trans. [m]";
+  if (!est.has_timestamps()) data.time_label = "frame";
   return data;
 }
 
