@@ -1,0 +1,55 @@
+// Bundle adjustment of keyframe poses and points (ORB-SLAM2's Optimizer::LocalBundleAdjustment and
+// GlobalBundleAdjustemnt, Mur-Artal & Tardós 2017): monocular and stereo reprojection residuals
+// with a Huber loss; some poses are held fixed (the keyframes that see local points but are not
+// local themselves). ORB-SLAM2's schedule: optimize, drop edges above the chi-square threshold or
+// behind a camera, optimize again without the robust loss; the caller erases the reported outlier
+// observations from the map. Ceres with analytic Jacobians (checked numerically in tests).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "moslam/geometry/se3.h"
+#include "moslam/optim/observation.h"
+
+namespace moslam::optim {
+
+struct BundleProblem {
+  CameraModel camera;  // one camera for every pose (one sensor per run)
+  std::vector<geometry::SE3> T_cam_world;  // per pose
+  std::vector<bool> pose_fixed;            // per pose (same size)
+  std::vector<Eigen::Vector3d> points_world;
+  std::vector<bool> point_fixed;  // per point; empty = none fixed
+  struct Edge {
+    int pose = -1;   // into T_cam_world
+    int point = -1;  // into points_world
+    Observation observation;
+  };
+  std::vector<Edge> edges;
+};
+
+struct BundleAdjusterOptions {
+  int iterations_first = 5;    // robust stage (ORB-SLAM2: 5)
+  int iterations_second = 10;  // after outlier removal, no robust loss (ORB-SLAM2: 10)
+  double chi2_mono = kChi2Mono;
+  double chi2_stereo = kChi2Stereo;
+  bool robust = true;  // Huber with delta sqrt(chi2_*) in the first stage
+  int num_threads = 1;
+  void Check() const;  // InputError naming the field
+};
+
+struct BundleResult {
+  std::vector<geometry::SE3> T_cam_world;  // every pose (fixed ones unchanged)
+  std::vector<Eigen::Vector3d> points_world;
+  std::vector<bool> edge_inlier;  // per edge after the second stage (chi2 and positive depth)
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  int iterations = 0;
+};
+
+// Index out of range or size mismatch: broken invariant (CHECK). An empty problem returns the
+// input unchanged.
+BundleResult AdjustBundle(const BundleProblem& problem, const BundleAdjusterOptions& options = {});
+
+}  // namespace moslam::optim

@@ -1,0 +1,47 @@
+// Pose-only optimization (ORB-SLAM2's Optimizer::PoseOptimization, Mur-Artal & Tardós 2017):
+// the camera pose is refined against fixed 3D points with a robust (Huber) loss; after each of
+// several rounds every observation's chi-square error is compared to the 95 % threshold, outliers
+// are excluded from the next round (and may come back if they fit again), and the last round runs
+// without the robust loss. Solved with Ceres and analytic Jacobians (checked numerically in tests).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "moslam/geometry/se3.h"
+#include "moslam/optim/observation.h"
+
+namespace moslam::optim {
+
+struct PoseOptimizerOptions {
+  int rounds = 4;                  // outlier-classification rounds (ORB-SLAM2: 4)
+  int iterations_per_round = 10;   // Levenberg-Marquardt iterations per round (ORB-SLAM2: 10)
+  double chi2_mono = kChi2Mono;    // outlier threshold on the whitened squared error, 2 DoF
+  double chi2_stereo = kChi2Stereo;  // the same, 3 DoF
+  // Rounds that use the Huber loss with delta sqrt(chi2_*); ORB-SLAM2 drops it in the last two
+  // rounds (level >= 2).
+  int robust_rounds = 2;
+  // Threads Ceres may use (1 for --deterministic runs).
+  int num_threads = 1;
+  void Check() const;  // InputError naming the field
+};
+
+struct PoseOptimizerResult {
+  geometry::SE3 T_cam_world;   // refined pose
+  std::vector<bool> inlier;    // per observation, after the last round
+  int num_inliers = 0;
+  double final_cost = 0.0;     // 0.5 * sum of squared whitened residuals of the inliers
+};
+
+// points_world[i] is observed as observations[i]. `initial_outlier` (empty or one flag per
+// observation) marks observations to start as outliers. Fewer than 3 observations: returned
+// unchanged with every observation an outlier (an expected failure, not an error). Size mismatch
+// is a broken invariant (CHECK).
+PoseOptimizerResult OptimizePose(const CameraModel& camera, const geometry::SE3& T_cam_world_init,
+                                 const std::vector<Eigen::Vector3d>& points_world,
+                                 const std::vector<Observation>& observations,
+                                 const PoseOptimizerOptions& options = {},
+                                 const std::vector<bool>& initial_outlier = {});
+
+}  // namespace moslam::optim
