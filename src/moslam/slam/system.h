@@ -1,0 +1,99 @@
+// The SLAM system facade (ORB-SLAM2's System, Mur-Artal & Tardós 2017), the one entry point apps
+// use: frames in, per-frame reports out, trajectories at the end. Behind it: tracking in the
+// caller's thread and local mapping in its own thread, fed through a bounded keyframe queue
+// (docs/ARCHITECTURE.md, "Threads and data flow"). With `deterministic` set, mapping runs
+// synchronously after each new keyframe and every seed is fixed, so runs are identical.
+//
+//   slam::System system(options);                 // throws InputError on a bad settings file
+//   for (...) { slam::FrameReport r = system.Track(input); ... }
+//   system.Finish();                              // drains mapping, stops threads
+//   eval::Trajectory trajectory = system.CameraTrajectory();
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "moslam/eval/trajectory.h"
+#include "moslam/geometry/se3.h"
+#include "moslam/io/orbslam_settings.h"
+#include "moslam/io/sequence.h"
+
+namespace moslam::slam {
+
+struct SystemOptions {
+  io::SensorType sensor = io::SensorType::kRgbD;  // stereo or RGB-D (monocular: a later issue)
+  io::OrbSlamSettings settings;                   // as loaded by io::LoadOrbSlamSettings
+  // Mapping synchronously after each keyframe, fixed seeds, one thread everywhere.
+  bool deterministic = false;
+  int keyframe_queue_capacity = 8;  // bounded queue tracking -> local mapping (keyframes)
+  void Check() const;               // InputError naming the field
+};
+
+// One frame as the tracker takes it. Images are already loaded (io::LoadFrameImages).
+struct FrameInput {
+  double timestamp = 0.0;  // seconds
+  cv::Mat image;           // left (stereo) or colour (RGB-D) image: CV_8UC1, or CV_8UC3/CV_8UC4
+                           // converted to grey following settings.rgb
+  cv::Mat right;           // stereo: the rectified right image, same size and type
+  cv::Mat depth;           // RGB-D: CV_32FC1 metres registered to `image` (0 = invalid)
+  cv::Mat mask;            // CV_8UC1 of the image's size, non-zero = movable object; empty = none
+};
+
+enum class TrackingState { kNotInitialized, kOk, kLost };
+const char* ToString(TrackingState state);  // "not_initialized", "ok", "lost"
+
+// Wall-clock milliseconds spent in each stage of Track() for this frame.
+struct StageTimes {
+  double extract_ms = 0.0;    // ORB extraction (+ stereo matching / depth lookup)
+  double track_ms = 0.0;      // motion model / reference keyframe tracking
+  double local_map_ms = 0.0;  // local map tracking incl. pose optimization
+  double keyframe_ms = 0.0;   // keyframe decision and creation (and, deterministic, mapping)
+  double total_ms = 0.0;
+};
+
+struct FrameReport {
+  TrackingState state = TrackingState::kNotInitialized;
+  std::string reason;          // why not ok ("too few matches with the motion model", ...)
+  int num_features = 0;        // keypoints extracted
+  int num_matches = 0;         // matches from motion-model / reference-keyframe tracking
+  int num_inliers = 0;         // map points tracked after local-map pose optimization
+  bool new_keyframe = false;
+  StageTimes times;
+  std::optional<geometry::SE3> T_world_cam;  // when tracking is ok (or just initialized)
+};
+
+struct MapSummary {
+  int keyframes = 0;
+  int map_points = 0;
+  int lost_frames = 0;
+  int mapping_steps = 0;           // keyframes processed by local mapping
+  double mapping_ms_median = 0.0;  // per processed keyframe
+  double mapping_ms_total = 0.0;
+};
+
+class System {
+ public:
+  explicit System(const SystemOptions& options);
+  ~System();  // calls Finish() if it was not called
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+
+  FrameReport Track(const FrameInput& input);
+  // Waits until local mapping has processed every queued keyframe, then stops its thread.
+  void Finish();
+
+  // Every frame that has a pose (ORB-SLAM2 stores each frame relative to its reference keyframe,
+  // so the poses follow later keyframe corrections), timestamps in seconds.
+  eval::Trajectory CameraTrajectory() const;
+  eval::Trajectory KeyFrameTrajectory() const;
+  MapSummary Summary() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace moslam::slam
