@@ -193,6 +193,12 @@ TEST(AdjustBundle, DeterministicWithOneThread) {
   EXPECT_EQ(a.points_world, b.points_world);
   EXPECT_EQ(a.edge_inlier, b.edge_inlier);
   EXPECT_EQ(a.final_cost, b.final_cost);
+  // More threads: the same minimum up to the order of floating-point sums.
+  BundleAdjusterOptions threads;
+  threads.num_threads = 2;
+  const BundleResult c = AdjustBundle(scene.problem, threads);
+  EXPECT_EQ(c.edge_inlier, a.edge_inlier);
+  EXPECT_NEAR(c.final_cost, a.final_cost, 1e-6 * a.final_cost);
 }
 
 // The sparse reduced-camera solver finds the same optimum as the dense one.
