@@ -231,7 +231,7 @@ void BuildOffice(Builder& b, bool walking, bool seated) {
   if (walking) {
     // Two people walking loops that cross in front of the camera at 1-2 m (covering 20-60 % of
     // the view there) and go round the desks behind, in opposite directions.
-    const double near = -1.0 + rng.Uniform(-0.2, 0.2);
+    const double near = -0.8 + rng.Uniform(-0.2, 0.2);
     std::vector<Vector2d> a = {{-2.0, near}, {1.9, near + 0.2}, {1.9, desk_y + 1.0},
                                {-1.9, desk_y + 1.0}};
     std::vector<Vector2d> c = {{1.7, near + 0.7}, {-1.7, near + 0.5}, {-1.7, -1.4},
@@ -266,8 +266,8 @@ SE3 Rotate(const SE3& T, double rx, double ry, double rz) {
 }
 
 std::function<SE3(double)> IndoorTrajectory(const std::string& name, Rng& rng) {
-  const Vector3d eye(rng.Uniform(-0.2, 0.2), -2.3, 1.35 + rng.Uniform(-0.1, 0.1));
-  const Vector3d target(0.0, 1.0, 0.8);
+  const Vector3d eye(rng.Uniform(-0.2, 0.2), -2.3, 1.45 + rng.Uniform(-0.1, 0.1));
+  const Vector3d target(0.0, 1.0, 1.15);
   const SE3 base = LookAt(eye, target);
   std::array<Wobble, 3> pos = {Wobble(rng, 1, 6, 10), Wobble(rng, 1, 6, 10), Wobble(rng, 1, 6, 10)};
   std::array<Wobble, 3> rot = {Wobble(rng, 1, 5, 9), Wobble(rng, 1, 5, 9), Wobble(rng, 1, 5, 9)};

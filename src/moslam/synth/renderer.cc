@@ -5,7 +5,9 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 
+#include <algorithm>
 #include <array>
+#include <utility>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -223,7 +225,8 @@ Renderer::Renderer(int width, int height, const TextureSet& texture_set)
     throw std::runtime_error("synth renderer: framebuffer incomplete");
   }
 
-  // Textures: mipmapped, trilinear with 4x anisotropy, repeating.
+  // Textures: mipmapped, trilinear, repeating. No anisotropic filtering: in llvmpipe it made a
+  // 640x480 frame ~6x slower (206 vs 32 ms measured), far from the 20 frames/s budget.
   for (const Texture& t : texture_set.textures()) {
     GLuint id = 0;
     glGenTextures(1, &id);
@@ -237,7 +240,6 @@ Renderer::Renderer(int width, int height, const TextureSet& texture_set)
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_MIRRORED_REPEAT);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_MIRRORED_REPEAT);
-    glTexParameterf(GL_TEXTURE_2D, GL_TEXTURE_MAX_ANISOTROPY_EXT, 4.0f);
     g.textures.push_back(id);
   }
   glEnable(GL_DEPTH_TEST);
@@ -294,7 +296,19 @@ void Renderer::Render(const std::vector<Box>& boxes, const camera::PinholeOption
   glUniform1f(g.u_ambient, lighting.ambient);
   glUniform1f(g.u_diffuse, lighting.diffuse);
   glActiveTexture(GL_TEXTURE0);
-  for (const Box& b : boxes) {
+  // Front to back, large boxes (walls, floor, road) last: llvmpipe tests depth before shading, so
+  // hidden surfaces drawn later cost little. Order does not change the result (depth test, opaque
+  // boxes; ties are resolved by the stable order).
+  const Eigen::Vector3d eye = T_cam_world.Inverse().translation();
+  std::vector<std::pair<double, size_t>> order(boxes.size());
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const double big = boxes[i].half.maxCoeff() > 1.5 ? 1e3 : 0.0;
+    order[i] = {big + (boxes[i].T_world_box.translation() - eye).norm(), i};
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [key, index] : order) {
+    const Box& b = boxes[index];
     MOSLAM_CHECK(b.texture >= 0 && b.texture < static_cast<int>(g.textures.size()));
     Eigen::Matrix4d model = b.T_world_box.Matrix();
     model.block<3, 3>(0, 0) = model.block<3, 3>(0, 0) * b.half.asDiagonal();

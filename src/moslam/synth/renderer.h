@@ -1,7 +1,7 @@
 // Off-screen OpenGL renderer of textured boxes through OSMesa (Mesa's llvmpipe software rasterizer).
 //
 // Why OSMesa rather than a ray caster of our own: llvmpipe is a complete, multithreaded GL 3.3+
-// implementation shipped by Debian (libosmesa6-dev), so we get mipmapped trilinear/anisotropic
+// implementation shipped by Debian (libosmesa6-dev), so we get mipmapped trilinear
 // texture filtering (clean multi-scale texture for ORB's pyramid), depth testing and several
 // render targets for free, at hundreds of frames per second for scenes of a few hundred boxes.
 // A ray caster would need all of that written and tuned by hand. EGL's surfaceless platform
