@@ -1,9 +1,9 @@
 // The contact sheet of docs/SYNTH.md: every preset, a few frames each, as RGB, mask overlay
 // (class colours, moving objects outlined) and depth colour map.
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <spdlog/spdlog.h>
 
 #include "moslam/synth/generator.h"
 #include "moslam/util/error.h"
@@ -78,7 +78,8 @@ void WriteContactSheet(const std::string& path, uint64_t seed, const std::string
       cv::Mat resized;
       cv::resize(stack, resized, cv::Size(tile_w, stack.rows * tile_w / stack.cols), 0, 0,
                  cv::INTER_AREA);
-      cv::copyMakeBorder(resized, resized, 2, 2, 2, 2, cv::BORDER_CONSTANT, cv::Scalar(255, 255, 255));
+      cv::copyMakeBorder(resized, resized, 2, 2, 2, 2, cv::BORDER_CONSTANT,
+                         cv::Scalar(255, 255, 255));
       tiles.push_back(resized);
     }
     cv::Mat row;

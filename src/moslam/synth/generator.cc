@@ -9,13 +9,13 @@
 #include <thread>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <spdlog/spdlog.h>
 
 #include "moslam/synth/bounded_queue.h"
-#include "moslam/synth/rng.h"
 #include "moslam/synth/output_files.h"
+#include "moslam/synth/rng.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
 #include "moslam/util/progress.h"
@@ -211,15 +211,15 @@ GenerateStats GenerateSequence(const GeneratorOptions& options) {
   writer.Finish();
   GenerateStats stats;
   coverage.Fill(&stats);
-  stats.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }
 
 GenerateStats GenerateTraining(const GeneratorOptions& options, int count) {
   options.Check();
   if (count <= 0) ThrowInput("synth: --train needs a positive frame count, got {}", count);
-  const int w = options.width > 0 ? options.width : 640, h = options.height > 0 ? options.height : 480;
+  const int w = options.width > 0 ? options.width : 640,
+            h = options.height > 0 ? options.height : 480;
   // Procedural textures from another seed stream than the presets', photographs from the other
   // half of the folder (presets use even-numbered files, training odd-numbered ones).
   const TextureSet textures = LoadTextures(options, Rng::Mix(options.seed + 0x7AA1), 1);
@@ -241,8 +241,7 @@ GenerateStats GenerateTraining(const GeneratorOptions& options, int count) {
   writer.Finish();
   GenerateStats stats;
   coverage.Fill(&stats);
-  stats.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }
 

@@ -15,17 +15,20 @@
 namespace moslam::synth {
 
 struct GeneratorOptions {
-  std::string preset;        // a name of Presets()
-  uint64_t seed = 1;         // scene, people, camera path, procedural textures and noise
-  std::string out;           // output folder (created; existing files are overwritten)
-  int frames = 0;            // 0: the preset's default (like the TUM sequence it mimics)
-  std::string textures_dir;  // photographs to add to the procedural textures; empty: none
-  bool motion_blur = false;  // average 4 renders over a 1/60 s exposure (colour only)
+  std::string preset;         // a name of Presets()
+  uint64_t seed = 1;          // scene, people, camera path, procedural textures and noise
+  std::string out;            // output folder (created; existing files are overwritten)
+  int frames = 0;             // 0: the preset's default (like the TUM sequence it mimics)
+  std::string textures_dir;   // photographs to add to the procedural textures; empty: none
+  bool motion_blur = false;   // average 4 renders over a 1/60 s exposure (colour only)
   int width = 0, height = 0;  // 0: the preset's size (640x480 indoor, 1226x370 street)
   int texture_size = 512;     // procedural texture size (power of two)
   int png_compression = 1;    // 0-9: zlib level of every PNG (1: fast, ~1.5x larger than 9)
   bool sensor_noise = true;   // false: exact depth and colour (for ground-truth tests)
   bool progress = true;       // log progress lines
+  // Also write depth_gt/<stamp>.png: the exact depth (no noise, no holes; factor 5000) for
+  // ground-truth checks (synth/check.h). RGB-D presets only.
+  bool write_exact_depth = false;
 
   // Throws InputError naming the field when a value is out of range.
   void Check() const;
@@ -37,12 +40,12 @@ int LabelMinPixels(int width, int height);
 
 struct GenerateStats {
   int frames = 0;
-  double seconds = 0.0;                 // wall time of rendering and writing
-  double mean_person_fraction = 0.0;    // mean over frames of person pixels / image pixels
+  double seconds = 0.0;               // wall time of rendering and writing
+  double mean_person_fraction = 0.0;  // mean over frames of person pixels / image pixels
   double max_person_fraction = 0.0;
-  double frames_20_60 = 0.0;            // fraction of frames with 20-60 % person pixels
-  double frames_over_10 = 0.0;          // fraction of frames with more than 10 % person pixels
-  double mean_moving_fraction = 0.0;    // mean fraction of moving pixels
+  double frames_20_60 = 0.0;          // fraction of frames with 20-60 % person pixels
+  double frames_over_10 = 0.0;        // fraction of frames with more than 10 % person pixels
+  double mean_moving_fraction = 0.0;  // mean fraction of moving pixels
 };
 
 // Writes a preset sequence to options.out. Throws InputError on bad options or unwritable output.

@@ -17,7 +17,8 @@ void MakeDirs(const std::string& folder, const std::vector<std::string>& subdirs
   std::error_code ec;
   for (const std::string& d : subdirs) {
     fs::create_directories(fs::path(folder) / d, ec);
-    if (ec) ThrowInput("synth: cannot create {}: {}", (fs::path(folder) / d).string(), ec.message());
+    if (ec)
+      ThrowInput("synth: cannot create {}: {}", (fs::path(folder) / d).string(), ec.message());
   }
 }
 
@@ -53,9 +54,10 @@ void WriteClassesFile(const std::string& path) {
 std::string SettingsYaml(const SequenceSpec& spec) {
   const auto& c = spec.camera;
   std::string s = "%YAML:1.0\n";
-  s += fmt::format("# moslam synth settings: preset {} ({}x{}). Exact pinhole camera, no "
-                   "distortion.\n",
-                   spec.info.name, c.width, c.height);
+  s += fmt::format(
+      "# moslam synth settings: preset {} ({}x{}). Exact pinhole camera, no "
+      "distortion.\n",
+      spec.info.name, c.width, c.height);
   s += fmt::format("Camera.fx: {:.6f}\nCamera.fy: {:.6f}\nCamera.cx: {:.6f}\nCamera.cy: {:.6f}\n",
                    c.fx, c.fy, c.cx, c.cy);
   s += "Camera.k1: 0.0\nCamera.k2: 0.0\nCamera.p1: 0.0\nCamera.p2: 0.0\nCamera.k3: 0.0\n";
@@ -78,6 +80,7 @@ OutputWriter::OutputWriter(const std::string& folder, const SequenceSpec& spec,
                            const GeneratorOptions& options)
     : folder_(folder),
       stereo_(spec.info.stereo),
+      exact_depth_(options.write_exact_depth && !spec.info.stereo),
       png_params_({cv::IMWRITE_PNG_COMPRESSION, options.png_compression}),
       label_min_pixels_(LabelMinPixels(spec.camera.width, spec.camera.height)) {
   if (stereo_) {
@@ -88,13 +91,15 @@ OutputWriter::OutputWriter(const std::string& folder, const SequenceSpec& spec,
     const auto& c = spec.camera;
     for (int i = 0; i < 4; ++i) {
       const double tx = (i % 2 == 1) ? -c.fx * spec.baseline_m : 0.0;
-      calib << fmt::format("P{}: {:.12e} 0.000000000000e+00 {:.12e} {:.12e} 0.000000000000e+00 "
-                           "{:.12e} {:.12e} 0.000000000000e+00 0.000000000000e+00 "
-                           "0.000000000000e+00 1.000000000000e+00 0.000000000000e+00\n",
-                           i, c.fx, c.cx, tx, c.fy, c.cy);
+      calib << fmt::format(
+          "P{}: {:.12e} 0.000000000000e+00 {:.12e} {:.12e} 0.000000000000e+00 "
+          "{:.12e} {:.12e} 0.000000000000e+00 0.000000000000e+00 "
+          "0.000000000000e+00 1.000000000000e+00 0.000000000000e+00\n",
+          i, c.fx, c.cx, tx, c.fy, c.cy);
     }
   } else {
     MakeDirs(folder, {"rgb", "depth", "class", "instance", "moving"});
+    if (exact_depth_) MakeDirs(folder, {"depth_gt"});
     rgb_ = Open(folder, "rgb.txt");
     depth_ = Open(folder, "depth.txt");
     gt_ = Open(folder, "groundtruth.txt");
@@ -137,7 +142,8 @@ void OutputWriter::WriteFrame(const FrameData& f) {
     }
     const auto m = (T_world_first_.Inverse() * f.T_world_cam).Matrix3x4();
     for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 4; ++c) poses_ << fmt::format("{:.9e}{}", m(r, c), r == 2 && c == 3 ? "\n" : " ");
+      for (int c = 0; c < 4; ++c)
+        poses_ << fmt::format("{:.9e}{}", m(r, c), r == 2 && c == 3 ? "\n" : " ");
     }
   } else {
     stem = TumStamp(f.timestamp);
@@ -145,6 +151,11 @@ void OutputWriter::WriteFrame(const FrameData& f) {
     cv::cvtColor(f.rgb, bgr, cv::COLOR_RGB2BGR);
     WritePng(image, bgr);
     WritePng("depth/" + stem + ".png", f.depth);
+    if (exact_depth_) {
+      cv::Mat exact;
+      f.depth_m.convertTo(exact, CV_16U, 5000.0);  // rounds to the nearest 0.2 mm
+      WritePng("depth_gt/" + stem + ".png", exact);
+    }
     rgb_ << stem << " " << image << "\n";
     depth_ << stem << " depth/" << stem << ".png\n";
     assoc_ << stem << " " << image << " " << stem << " depth/" << stem << ".png\n";

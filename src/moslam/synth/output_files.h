@@ -34,6 +34,7 @@ class OutputWriter {
   void WritePng(const std::string& relative, const cv::Mat& image);
   std::string folder_;
   bool stereo_;
+  bool exact_depth_;
   std::vector<int> png_params_;
   int label_min_pixels_;
   int index_ = 0;
@@ -44,8 +45,7 @@ class OutputWriter {
 
 class TrainingWriter {
  public:
-  TrainingWriter(const std::string& folder, const GeneratorOptions& options, int width,
-                 int height);
+  TrainingWriter(const std::string& folder, const GeneratorOptions& options, int width, int height);
   void WriteFrame(const FrameData& frame);
   void Finish();
 

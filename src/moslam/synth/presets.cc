@@ -11,9 +11,9 @@
 namespace moslam::synth {
 namespace {
 
-using geometry::SE3;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
+using geometry::SE3;
 
 constexpr double kDeg = M_PI / 180.0;
 // Stream ids that keep the random choices of presets, training scenes and noise apart.
@@ -106,8 +106,8 @@ class Builder {
     }
     // Clutter on the desk: books and boxes (background).
     for (int i = 0; i < 3; ++i) {
-      Add(T * At(rng_.Uniform(-l / 2 + 0.2, l / 2 - 0.2), rng_.Uniform(-dd / 4, dd / 4),
-                 hh + 0.04, rng_.Uniform(0, M_PI)),
+      Add(T * At(rng_.Uniform(-l / 2 + 0.2, l / 2 - 0.2), rng_.Uniform(-dd / 4, dd / 4), hh + 0.04,
+                 rng_.Uniform(0, M_PI)),
           {rng_.Uniform(0.08, 0.18), rng_.Uniform(0.06, 0.12), 0.04},
           Pick(rng_, tex_, TextureKind::kPoster), 0.0, kBackground, 0);
     }
@@ -148,7 +148,8 @@ class Builder {
       if (i == levels) break;
       double yy = -width / 2 + 0.03;
       while (yy < width / 2 - 0.05) {
-        const double bw = rng_.Uniform(0.025, 0.07), bh = rng_.Uniform(0.18, height / levels - 0.04);
+        const double bw = rng_.Uniform(0.025, 0.07),
+                     bh = rng_.Uniform(0.18, height / levels - 0.04);
         Add(T * At(0, yy + bw / 2, z + 0.025 + bh / 2), {depth / 2 - 0.04, bw / 2, bh / 2},
             Pick(rng_, tex_, TextureKind::kPoster), 0.0, kBackground, 0,
             static_cast<float>(rng_.Uniform(0.6, 1.1)));
@@ -224,18 +225,17 @@ void BuildOffice(Builder& b, bool walking, bool seated) {
   if (seated) {
     // Two people at the desks facing the camera (-y), as in fr3 sitting_static.
     for (int i = 0; i < 2; ++i) {
-      b.AddPerson(Person::Seated(b.Look(), Vector2d(i == 0 ? -0.9 : 0.9, desk_y + 0.7),
-                                 -M_PI / 2, 0.5, rng.Uniform(0, 100)));
+      b.AddPerson(Person::Seated(b.Look(), Vector2d(i == 0 ? -0.9 : 0.9, desk_y + 0.7), -M_PI / 2,
+                                 0.5, rng.Uniform(0, 100)));
     }
   }
   if (walking) {
     // Two people walking loops that cross in front of the camera at 1-2 m (covering 20-60 % of
     // the view there) and go round the desks behind, in opposite directions.
     const double near = -0.8 + rng.Uniform(-0.2, 0.2);
-    std::vector<Vector2d> a = {{-2.0, near}, {1.9, near + 0.2}, {1.9, desk_y + 1.0},
-                               {-1.9, desk_y + 1.0}};
-    std::vector<Vector2d> c = {{1.7, near + 0.7}, {-1.7, near + 0.5}, {-1.7, -1.4},
-                               {1.7, -1.3}};
+    std::vector<Vector2d> a = {
+        {-2.0, near}, {1.9, near + 0.2}, {1.9, desk_y + 1.0}, {-1.9, desk_y + 1.0}};
+    std::vector<Vector2d> c = {{1.7, near + 0.7}, {-1.7, near + 0.5}, {-1.7, -1.4}, {1.7, -1.3}};
     b.AddPerson(Person::Walking(b.Look(), a, rng.Uniform(0.8, 1.1), rng.Uniform(0, 5)));
     b.AddPerson(Person::Walking(b.Look(), c, rng.Uniform(0.7, 1.0), rng.Uniform(0, 5)));
   }
@@ -304,8 +304,8 @@ void BuildStreet(Builder& b) {
   Rng& rng = b.rng();
   const TextureSet& tex = b.textures();
   const double length = 400.0;
-  b.Add(At(length / 2 - 20, 0, -0.1), {length / 2 + 20, 5.0, 0.1}, Pick(rng, tex, TextureKind::kRoad),
-        3.0, kBackground, 0);
+  b.Add(At(length / 2 - 20, 0, -0.1), {length / 2 + 20, 5.0, 0.1},
+        Pick(rng, tex, TextureKind::kRoad), 3.0, kBackground, 0);
   for (int side = -1; side <= 1; side += 2) {
     b.Add(At(length / 2 - 20, side * 7.0, 0.0), {length / 2 + 20, 2.0, 0.12},
           Pick(rng, tex, TextureKind::kFloor), 1.5, kBackground, 0);

@@ -19,8 +19,8 @@ namespace moslam::synth {
 struct PresetInfo {
   std::string name;
   std::string description;
-  bool stereo = false;      // KITTI stereo layout instead of TUM RGB-D
-  int default_frames = 0;   // like the TUM / KITTI sequence it mimics
+  bool stereo = false;     // KITTI stereo layout instead of TUM RGB-D
+  int default_frames = 0;  // like the TUM / KITTI sequence it mimics
   double rate_hz = 30.0;
 };
 
@@ -34,8 +34,8 @@ struct SequenceSpec {
   PresetInfo info;
   World world;
   Lighting lighting;
-  camera::PinholeOptions camera;  // the (left) camera
-  double baseline_m = 0.0;        // stereo only
+  camera::PinholeOptions camera;                     // the (left) camera
+  double baseline_m = 0.0;                           // stereo only
   std::function<geometry::SE3(double)> T_world_cam;  // camera pose at time t (seconds from start)
 };
 

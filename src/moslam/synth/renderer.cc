@@ -1,19 +1,19 @@
 #include "moslam/synth/renderer.h"
 
 #define GL_GLEXT_PROTOTYPES
-#include <GL/osmesa.h>
 #include <GL/gl.h>
 #include <GL/glext.h>
+#include <GL/osmesa.h>
 
 #include <algorithm>
 #include <array>
-#include <utility>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
-#include "moslam/util/check.h"
 #include <spdlog/spdlog.h>
+#include "moslam/util/check.h"
 
 namespace moslam::synth {
 namespace {
@@ -89,8 +89,8 @@ GLuint Compile(GLenum type, const char* source) {
 std::vector<float> CubeVertices() {
   std::vector<float> v;
   // For each face: normal axis n and sign s; u and v axes chosen so side faces have v = z (up).
-  const int faces[6][4] = {{0, 1, 1, 2}, {0, -1, 1, 2}, {1, 1, 0, 2},
-                           {1, -1, 0, 2}, {2, 1, 0, 1}, {2, -1, 0, 1}};
+  const int faces[6][4] = {{0, 1, 1, 2},  {0, -1, 1, 2}, {1, 1, 0, 2},
+                           {1, -1, 0, 2}, {2, 1, 0, 1},  {2, -1, 0, 1}};
   const float corners[6][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, -1}, {1, 1}, {-1, 1}};
   for (const auto& f : faces) {
     for (const auto& c : corners) {
@@ -99,8 +99,8 @@ std::vector<float> CubeVertices() {
       n[f[0]] = static_cast<float>(f[1]);
       p[f[2]] = c[0];
       p[f[3]] = c[1];
-      v.insert(v.end(), {p[0], p[1], p[2], n[0], n[1], n[2], c[0], c[1],
-                         static_cast<float>(f[2]), static_cast<float>(f[3])});
+      v.insert(v.end(), {p[0], p[1], p[2], n[0], n[1], n[2], c[0], c[1], static_cast<float>(f[2]),
+                         static_cast<float>(f[3])});
     }
   }
   return v;
@@ -149,9 +149,17 @@ Renderer::Renderer(int width, int height, const TextureSet& texture_set)
   Impl& g = *impl_;
   g.width = width;
   g.height = height;
-  const int attributes[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24,
-                            OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
-                            OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+  const int attributes[] = {OSMESA_FORMAT,
+                            OSMESA_RGBA,
+                            OSMESA_DEPTH_BITS,
+                            24,
+                            OSMESA_PROFILE,
+                            OSMESA_CORE_PROFILE,
+                            OSMESA_CONTEXT_MAJOR_VERSION,
+                            3,
+                            OSMESA_CONTEXT_MINOR_VERSION,
+                            3,
+                            0};
   g.context = OSMesaCreateContextAttribs(attributes, nullptr);
   if (g.context == nullptr) throw std::runtime_error("synth renderer: OSMesa context failed");
   g.dummy.resize(16 * 16 * 4);

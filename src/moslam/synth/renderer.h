@@ -1,4 +1,5 @@
-// Off-screen OpenGL renderer of textured boxes through OSMesa (Mesa's llvmpipe software rasterizer).
+// Off-screen OpenGL renderer of textured boxes through OSMesa (Mesa's llvmpipe software
+// rasterizer).
 //
 // Why OSMesa rather than a ray caster of our own: llvmpipe is a complete, multithreaded GL 3.3+
 // implementation shipped by Debian (libosmesa6-dev), so we get mipmapped trilinear

@@ -61,8 +61,8 @@ struct Pose {
   double hip_height = 0.0;  // 0: standing
 };
 
-void AppendFigure(const PersonLook& look, const SE3& T_world_person, const Pose& pose,
-                  uint16_t id, std::vector<Box>* boxes) {
+void AppendFigure(const PersonLook& look, const SE3& T_world_person, const Pose& pose, uint16_t id,
+                  std::vector<Box>* boxes) {
   const double s = look.height_m / 1.75;
   const double leg = 0.45 * s, arm_u = 0.3 * s, arm_l = 0.27 * s;
   const double hip_z = pose.hip_height > 0 ? pose.hip_height : 0.93 * s + pose.bob;
@@ -261,8 +261,8 @@ std::vector<uint16_t> World::MovingInstances(double t, double dt) const {
       for (int c = 0; c < 8; ++c) {
         const Vector3d corner((c & 1) ? 1 : -1, (c & 2) ? 1 : -1, (c & 4) ? 1 : -1);
         const Vector3d local = corner.cwiseProduct(now[i].half);
-        max_shift = std::max(
-            max_shift, (now[i].T_world_box * local - before[i].T_world_box * local).norm());
+        max_shift = std::max(max_shift,
+                             (now[i].T_world_box * local - before[i].T_world_box * local).norm());
       }
     }
     if (max_shift > 5e-4) moving.push_back(a.instance);

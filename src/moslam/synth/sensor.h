@@ -38,7 +38,6 @@ cv::Mat KinectDepth(const cv::Mat& depth_m, const DepthNoiseOptions& options, do
                     uint64_t seed, uint64_t frame);
 
 // Adds colour noise in place (CV_8UC3). Deterministic in (seed, frame).
-void AddColourNoise(cv::Mat* rgb, const ColourNoiseOptions& options, uint64_t seed,
-                    uint64_t frame);
+void AddColourNoise(cv::Mat* rgb, const ColourNoiseOptions& options, uint64_t seed, uint64_t frame);
 
 }  // namespace moslam::synth

@@ -134,7 +134,8 @@ cv::Mat Wood(Rng& rng, int size) {
       const float g = 0.5f + 0.5f * std::sin(2 * static_cast<float>(M_PI) *
                                              (u * rings + 3.0f * warp.at<float>(y, x)));
       const bool seam = (x * planks) % size < planks * 2;
-      Put(img, x, y, Mix(light, dark, g * g), (seam ? 0.5f : 1.0f) * (0.85f + 0.3f * fine.at<float>(y, x)));
+      Put(img, x, y, Mix(light, dark, g * g),
+          (seam ? 0.5f : 1.0f) * (0.85f + 0.3f * fine.at<float>(y, x)));
     }
   }
   return img;
@@ -152,8 +153,8 @@ cv::Mat Clothing(Rng& rng, int size) {
     for (int x = 0; x < size; ++x) {
       const bool sx = (x % period) < period / 3, sy = (y % period) < period / 4;
       Colour col = a;
-      if (style == 0) col = sx && sy ? c : (sx || sy ? b : a);  // plaid
-      if (style == 1) col = sy ? b : ((y % period) > period * 3 / 4 ? c : a);  // stripes
+      if (style == 0) col = sx && sy ? c : (sx || sy ? b : a);                      // plaid
+      if (style == 1) col = sy ? b : ((y % period) > period * 3 / 4 ? c : a);       // stripes
       if (style == 2) col = Mix(a, b, noise.at<float>(y, x) > 0.5f ? 1.0f : 0.0f);  // camouflage
       const float weave = ((x + y) % 4 < 2) ? 0.92f : 1.05f;
       Put(img, x, y, col, weave * (0.75f + 0.5f * noise.at<float>(y, x)));
@@ -178,16 +179,20 @@ cv::Mat Clothing(Rng& rng, int size) {
 
 // Posters and screens: a mottled backdrop with blocks, discs and "text" lines at several scales.
 cv::Mat Poster(Rng& rng, int size) {
-  cv::Mat img = Mottled(rng, size, RandomColour(rng, 0.2f, 1.0f), RandomColour(rng, 0.0f, 0.8f),
-                        2, 2.0f);
+  cv::Mat img =
+      Mottled(rng, size, RandomColour(rng, 0.2f, 1.0f), RandomColour(rng, 0.0f, 0.8f), 2, 2.0f);
   for (int i = 0; i < 25; ++i) {
     const Colour m = RandomColour(rng, 0.0f, 1.0f);
     const cv::Scalar s(255 * m[0], 255 * m[1], 255 * m[2]);
     const cv::Point p(rng.Index(size), rng.Index(size));
     const int r = 3 + rng.Index(size / 6);
     switch (rng.Index(3)) {
-      case 0: cv::circle(img, p, r, s, -1, cv::LINE_8); break;
-      case 1: cv::rectangle(img, p, p + cv::Point(r, r * 2 / 3), s, -1, cv::LINE_8); break;
+      case 0:
+        cv::circle(img, p, r, s, -1, cv::LINE_8);
+        break;
+      case 1:
+        cv::rectangle(img, p, p + cv::Point(r, r * 2 / 3), s, -1, cv::LINE_8);
+        break;
       default:
         for (int l = 0; l < 6; ++l) {
           const cv::Point q = p + cv::Point(0, l * 6);
@@ -200,8 +205,8 @@ cv::Mat Poster(Rng& rng, int size) {
 
 // Facades: a wall colour with a grid of dark windows and frames.
 cv::Mat Facade(Rng& rng, int size) {
-  cv::Mat img = Mottled(rng, size, RandomColour(rng, 0.4f, 0.9f), RandomColour(rng, 0.3f, 0.7f),
-                        4, 1.5f);
+  cv::Mat img =
+      Mottled(rng, size, RandomColour(rng, 0.4f, 0.9f), RandomColour(rng, 0.3f, 0.7f), 4, 1.5f);
   const int n = 4 << rng.Index(2), cell = size / n;
   const Colour glass = RandomColour(rng, 0.05f, 0.35f);
   for (int r = 0; r < n; ++r) {
@@ -209,8 +214,9 @@ cv::Mat Facade(Rng& rng, int size) {
       const cv::Point p(c * cell + cell / 4, r * cell + cell / 5);
       const cv::Point q = p + cv::Point(cell / 2, cell * 3 / 5);
       const float t = static_cast<float>(rng.Uniform(0.6, 1.4));
-      cv::rectangle(img, p, q, cv::Scalar(255 * glass[0] * t, 255 * glass[1] * t, 255 * glass[2] * t),
-                    -1, cv::LINE_8);
+      cv::rectangle(img, p, q,
+                    cv::Scalar(255 * glass[0] * t, 255 * glass[1] * t, 255 * glass[2] * t), -1,
+                    cv::LINE_8);
       cv::rectangle(img, p, q, cv::Scalar(230, 230, 225), 2, cv::LINE_8);
     }
   }
@@ -236,10 +242,14 @@ cv::Mat MakeProceduralTexture(TextureKind kind, uint64_t seed, int size) {
       return rng.Uniform() < 0.5 ? Wood(rng, size)
                                  : Mottled(rng, size, RandomColour(rng, 0.2f, 0.6f),
                                            RandomColour(rng, 0.1f, 0.5f), 16, 3.0f);
-    case TextureKind::kCeiling: return Bricks(rng, size);
-    case TextureKind::kWood: return Wood(rng, size);
-    case TextureKind::kPoster: return Poster(rng, size);
-    case TextureKind::kClothing: return Clothing(rng, size);
+    case TextureKind::kCeiling:
+      return Bricks(rng, size);
+    case TextureKind::kWood:
+      return Wood(rng, size);
+    case TextureKind::kPoster:
+      return Poster(rng, size);
+    case TextureKind::kClothing:
+      return Clothing(rng, size);
     case TextureKind::kTrousers:
       return Mottled(rng, size, RandomColour(rng, 0.05f, 0.4f), RandomColour(rng, 0.2f, 0.7f), 32,
                      3.0f);
@@ -256,8 +266,10 @@ cv::Mat MakeProceduralTexture(TextureKind kind, uint64_t seed, int size) {
                      1.0f);
     case TextureKind::kRoad:
       return Mottled(rng, size, {0.35f, 0.35f, 0.37f}, {0.2f, 0.2f, 0.22f}, 32, 3.0f);
-    case TextureKind::kFacade: return Facade(rng, size);
-    case TextureKind::kCount: break;
+    case TextureKind::kFacade:
+      return Facade(rng, size);
+    case TextureKind::kCount:
+      break;
   }
   MOSLAM_CHECK(false) << "bad texture kind";
   return {};
@@ -284,7 +296,8 @@ void TextureSet::AddPhotos(const std::string& folder, int size, int stride, int 
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(folder)) {
     std::string ext = entry.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
     if (entry.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg")) {
       files.push_back(entry.path().string());
     }

@@ -58,8 +58,8 @@ class TextureSet {
  private:
   void Add(Texture texture);
   std::vector<Texture> textures_;
-  std::vector<std::vector<int>> by_kind_ = std::vector<std::vector<int>>(
-      static_cast<size_t>(TextureKind::kCount));
+  std::vector<std::vector<int>> by_kind_ =
+      std::vector<std::vector<int>>(static_cast<size_t>(TextureKind::kCount));
 };
 
 // One procedural texture (exposed for tests).
