@@ -94,7 +94,8 @@ void WriteContactSheet(const std::string& path, uint64_t seed, const std::string
   cv::Mat sheet;
   cv::vconcat(rows, sheet);
   cv::cvtColor(sheet, sheet, cv::COLOR_RGB2BGR);
-  if (!cv::imwrite(path, sheet, {cv::IMWRITE_PNG_COMPRESSION, 9})) ThrowInput("synth: cannot write {}", path);
+  if (!cv::imwrite(path, sheet, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+    ThrowInput("synth: cannot write {}", path);
 }
 
 }  // namespace moslam::synth
