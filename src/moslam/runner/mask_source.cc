@@ -141,11 +141,22 @@ class MaskFiles : public MaskSource {
   MaskOptions options_;
 };
 
+// <root>/classes.txt; else beside the rgb/ folder of the first frame (an image-folder sequence
+// read from rgb/ itself has that folder as its root).
+std::string ClassesPath(const io::Sequence& sequence) {
+  const fs::path at_root = fs::path(sequence.root) / "classes.txt";
+  std::error_code ec;
+  if (fs::exists(at_root, ec) || sequence.empty()) return at_root.string();
+  const fs::path beside =
+      fs::path(sequence.frames.front().image_left).parent_path().parent_path() / "classes.txt";
+  return fs::exists(beside, ec) ? beside.string() : at_root.string();
+}
+
 class SynthGroundTruth : public MaskSource {
  public:
   SynthGroundTruth(const MaskOptions& options, const io::Sequence& sequence)
       : dilate_px_(options.dilate_px), lut_(1, 256, CV_8UC1, cv::Scalar(0)) {
-    const std::string classes_path = (fs::path(sequence.root) / "classes.txt").string();
+    const std::string classes_path = ClassesPath(sequence);
     const std::vector<ClassInfo> classes = ReadClasses(classes_path);
     for (const std::string& name : options.movable) {
       const auto it = std::find_if(classes.begin(), classes.end(),

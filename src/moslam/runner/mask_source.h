@@ -7,9 +7,9 @@
 //             it, unless `missing_empty` (then the frame has no mask).
 //   synth-gt  the synthetic generator's ground truth: per frame <dir>/class/<stem>.png (uint8
 //             class ids), where the frame's image is <dir>/rgb/<stem>.png, and
-//             <sequence root>/classes.txt with lines `<id> <name> <movable 0|1>`. The mask is the
-//             pixels whose class is movable: the classes named in `movable`, or, when that is
-//             empty, those marked 1 in classes.txt.
+//             classes.txt (in the sequence's root, else in <dir>) with lines `<id> <name> <movable
+//             0|1>`. The mask is the pixels whose class is movable: the classes named in `movable`,
+//             or, when that is empty, those marked 1 in classes.txt.
 //
 // Masks are read in the image-loading thread; MaskFor is const and safe to call from any thread.
 #pragma once
@@ -67,7 +67,7 @@ class MaskSource {
   virtual std::string Describe() const = 0;
 };
 
-// Checks `options` and, for synth-gt, reads <sequence.root>/classes.txt (InputError when absent,
+// Checks `options` and, for synth-gt, reads classes.txt (InputError when absent,
 // or when a name in `movable` is not one of its classes).
 std::unique_ptr<MaskSource> MakeMaskSource(const MaskOptions& options,
                                            const io::Sequence& sequence);
