@@ -83,6 +83,8 @@ class FakeTracker : public Tracker {
  public:
   std::function<bool(int)> lost = [](int) { return false; };
   std::function<void(int)> before_track = [](int) {};
+  // The pose reported for the i-th frame given, at timestamp t.
+  std::function<geometry::SE3(int, double)> pose = [](int, double t) { return PoseAt(t); };
   std::vector<cv::Mat> masks;   // FrameInput::mask of each frame, as given
   std::vector<cv::Mat> images;  // FrameInput::image
   std::vector<bool> had_right, had_depth;
@@ -108,7 +110,7 @@ class FakeTracker : public Tracker {
     }
     report.state = slam::TrackingState::kOk;
     report.new_keyframe = i % 2 == 0;
-    report.T_world_cam = PoseAt(input.timestamp);
+    report.T_world_cam = pose(i, input.timestamp);
     camera_.timestamps.push_back(input.timestamp);
     camera_.poses.push_back(*report.T_world_cam);
     if (report.new_keyframe) {
