@@ -7,8 +7,7 @@
 namespace moslam::geometry {
 
 std::optional<Eigen::Vector3d> TriangulateDlt(const Eigen::Vector2d& x1, const SE3& T_cam1_world,
-                                              const Eigen::Vector2d& x2,
-                                              const SE3& T_cam2_world) {
+                                              const Eigen::Vector2d& x2, const SE3& T_cam2_world) {
   const Matrix3x4d P1 = T_cam1_world.Matrix3x4();
   const Matrix3x4d P2 = T_cam2_world.Matrix3x4();
   Eigen::Matrix4d A;
