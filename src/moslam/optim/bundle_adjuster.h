@@ -16,7 +16,7 @@
 namespace moslam::optim {
 
 struct BundleProblem {
-  CameraModel camera;  // one camera for every pose (one sensor per run)
+  CameraModel camera;                      // one camera for every pose (one sensor per run)
   std::vector<geometry::SE3> T_cam_world;  // per pose
   std::vector<bool> pose_fixed;            // per pose (same size)
   std::vector<Eigen::Vector3d> points_world;

@@ -15,9 +15,9 @@
 namespace moslam::optim {
 
 struct PoseOptimizerOptions {
-  int rounds = 4;                  // outlier-classification rounds (ORB-SLAM2: 4)
-  int iterations_per_round = 10;   // Levenberg-Marquardt iterations per round (ORB-SLAM2: 10)
-  double chi2_mono = kChi2Mono;    // outlier threshold on the whitened squared error, 2 DoF
+  int rounds = 4;                    // outlier-classification rounds (ORB-SLAM2: 4)
+  int iterations_per_round = 10;     // Levenberg-Marquardt iterations per round (ORB-SLAM2: 10)
+  double chi2_mono = kChi2Mono;      // outlier threshold on the whitened squared error, 2 DoF
   double chi2_stereo = kChi2Stereo;  // the same, 3 DoF
   // Rounds that use the Huber loss with delta sqrt(chi2_*); ORB-SLAM2 drops it in the last two
   // rounds (level >= 2).
@@ -28,10 +28,10 @@ struct PoseOptimizerOptions {
 };
 
 struct PoseOptimizerResult {
-  geometry::SE3 T_cam_world;   // refined pose
-  std::vector<bool> inlier;    // per observation, after the last round
+  geometry::SE3 T_cam_world;  // refined pose
+  std::vector<bool> inlier;   // per observation, after the last round
   int num_inliers = 0;
-  double final_cost = 0.0;     // 0.5 * sum of squared whitened residuals of the inliers
+  double final_cost = 0.0;  // 0.5 * sum of squared whitened residuals of the inliers
 };
 
 // points_world[i] is observed as observations[i]. `initial_outlier` (empty or one flag per
