@@ -130,7 +130,7 @@ void Run(const RunArgs& args) {
 
   runner::RunDescription description;
   description.dataset_path = sequence.root;
-  description.dataset_format = io::ToString(*format);
+  description.format = *format;
   description.sensor = sequence.sensor;
   description.settings_path = args.settings;
   description.settings = settings;
@@ -144,8 +144,7 @@ void Run(const RunArgs& args) {
       MakeTracker(settings, sequence.sensor, args.deterministic);
   const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
-  const std::string summary = runner::WriteRunOutputs(sequence, result, description, out,
-                                                      *format == io::DatasetFormat::kKitti);
+  const std::string summary = runner::WriteRunOutputs(sequence, result, description, out);
   std::cout << summary << std::flush;
 }
 

@@ -213,7 +213,7 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                          {"settings", SettingsJson(d)},
                          {"dataset",
                           {{"path", d.dataset_path},
-                           {"format", d.dataset_format},
+                           {"format", io::ToString(d.format)},
                            {"sensor", io::ToString(d.sensor)}}},
                          {"mask_source", d.mask_source},
                          {"deterministic", d.deterministic},
@@ -226,7 +226,7 @@ std::string FormatSummary(const RunResult& result, const RunDescription& d,
                           const std::optional<RunAte>& ate) {
   const StateCounts counts = CountStates(result);
   std::string text;
-  text += fmt::format("data set     {} ({}, {})\n", d.dataset_path, d.dataset_format,
+  text += fmt::format("data set     {} ({}, {})\n", d.dataset_path, io::ToString(d.format),
                       io::ToString(d.sensor));
   text += fmt::format("frames       {} ({}:{}): {} tracked, {} lost, {} not initialized\n",
                       result.frames.size(), result.first, result.last, counts.ok, counts.lost,
@@ -247,15 +247,16 @@ std::string FormatSummary(const RunResult& result, const RunDescription& d,
 }
 
 std::string WriteRunOutputs(const io::Sequence& sequence, const RunResult& result,
-                            const RunDescription& description, const std::string& out_dir,
-                            bool kitti) {
+                            const RunDescription& description, const std::string& out_dir) {
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec) ThrowInFile(out_dir, "output folder cannot be created: " + ec.message());
   const fs::path out(out_dir);
   const std::string camera_path = (out / "CameraTrajectory.txt").string();
   WriteOrbSlamTum(result.camera, 9, camera_path);
-  if (kitti) WriteOrbSlamKitti(result.camera, (out / "CameraTrajectory_kitti.txt").string());
+  if (description.format == io::DatasetFormat::kKitti) {
+    WriteOrbSlamKitti(result.camera, (out / "CameraTrajectory_kitti.txt").string());
+  }
   WriteOrbSlamTum(result.keyframes, 7, (out / "KeyFrameTrajectory.txt").string());
   WriteFramesCsv(result, (out / "frames.csv").string());
   const std::optional<RunAte> ate =

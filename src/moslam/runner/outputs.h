@@ -18,6 +18,7 @@
 
 #include "moslam/eval/ate.h"
 #include "moslam/eval/trajectory.h"
+#include "moslam/io/dataset.h"
 #include "moslam/io/orbslam_settings.h"
 #include "moslam/io/sequence.h"
 #include "moslam/runner/run_loop.h"
@@ -37,7 +38,7 @@ void WriteFramesCsv(const RunResult& result, const std::string& path);
 // What the run was, for summary.json and the printed summary.
 struct RunDescription {
   std::string dataset_path;
-  std::string dataset_format;  // io::ToString(DatasetFormat)
+  io::DatasetFormat format = io::DatasetFormat::kAuto;  // as read; kKitti adds the KITTI file
   io::SensorType sensor = io::SensorType::kStereo;
   std::string settings_path;
   io::OrbSlamSettings settings;
@@ -67,10 +68,9 @@ std::string FormatSummary(const RunResult& result, const RunDescription& descrip
                           const std::optional<RunAte>& ate);
 
 // Writes every output into `out_dir` (created if needed) and returns the printed summary.
-// `kitti` adds CameraTrajectory_kitti.txt.
+// CameraTrajectory_kitti.txt is written for KITTI input (description.format) only.
 std::string WriteRunOutputs(const io::Sequence& sequence, const RunResult& result,
-                            const RunDescription& description, const std::string& out_dir,
-                            bool kitti);
+                            const RunDescription& description, const std::string& out_dir);
 
 // numpy.percentile (linear interpolation) of `values` at `percent` in [0, 100]; 0 when empty.
 double Percentile(std::vector<double> values, double percent);

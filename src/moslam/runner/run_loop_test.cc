@@ -43,7 +43,7 @@ RunOptions Quiet() {
 RunDescription Describe(const io::Sequence& seq, const MaskSource& masks) {
   RunDescription d;
   d.dataset_path = seq.root;
-  d.dataset_format = "test";
+  d.format = io::DetectDatasetFormat(seq.root).value();
   d.sensor = seq.sensor;
   d.settings_path = "none";
   d.mask_source = masks.Describe();
@@ -64,7 +64,7 @@ TEST(RunLoopTest, TumRunWritesEveryOutputInItsFormat) {
   EXPECT_FALSE(tracker.had_right[0]);
   EXPECT_TRUE(tracker.masks[0].empty());
 
-  const std::string text = WriteRunOutputs(seq, result, Describe(seq, *masks), out.path(), false);
+  const std::string text = WriteRunOutputs(seq, result, Describe(seq, *masks), out.path());
   const fs::path dir(out.path());
   // TUM camera trajectory: one line per tracked frame, 8 fields, ORB-SLAM2's decimals.
   const auto camera = Lines((dir / "CameraTrajectory.txt").string());
@@ -121,7 +121,7 @@ TEST(RunLoopTest, KittiRunAddsKittiTrajectoryAndEvaluatesByTimesTxt) {
   EXPECT_EQ(result.frames.front().index, 1);
   EXPECT_TRUE(tracker.had_right[0]);
   EXPECT_FALSE(tracker.had_depth[0]);
-  WriteRunOutputs(seq, result, Describe(seq, *masks), out.path(), /*kitti=*/true);
+  WriteRunOutputs(seq, result, Describe(seq, *masks), out.path());
   const fs::path dir(out.path());
   const auto kitti = Lines((dir / "CameraTrajectory_kitti.txt").string());
   ASSERT_EQ(kitti.size(), 4u);
@@ -153,7 +153,7 @@ TEST(RunLoopTest, SharedKittiExcerptWithGroundTruthTracker) {
   EXPECT_EQ(tracker.images[0].type(), CV_8UC1);
   EXPECT_EQ(tracker.images[0].size(), cv::Size(1226, 370));
   EXPECT_TRUE(tracker.had_right[50]);
-  WriteRunOutputs(seq, result, Describe(seq, *masks), out.path(), /*kitti=*/true);
+  WriteRunOutputs(seq, result, Describe(seq, *masks), out.path());
   EXPECT_EQ(Lines(out.path() + "/CameraTrajectory_kitti.txt").size(), seq.size());
   std::ifstream in(out.path() + "/summary.json");
   const nlohmann::json summary = nlohmann::json::parse(in);
