@@ -110,6 +110,14 @@ std::vector<std::pair<size_t, size_t>> SearchForTriangulation(const map::KeyFram
   const Eigen::Matrix3d F = Fundamental(kf1, kf2, cam.K());
   const auto& kps1 = kf1.frame.keypoints_undistorted;
   const auto& kps2 = kf2.frame.keypoints_undistorted;
+  // Unmatched keypoints of kf2, with their epipolar tolerance 3.84 sigma^2 (chi-square 1 DoF).
+  std::vector<size_t> free2;
+  std::vector<double> tolerance2;
+  for (size_t i2 = 0; i2 < kps2.size(); ++i2) {
+    if (kf2.points[i2]) continue;
+    free2.push_back(i2);
+    tolerance2.push_back(3.84 * kf2.frame.level_sigma2[kps2[i2].octave]);
+  }
   std::vector<bool> used2(kps2.size(), false);
   std::vector<std::pair<size_t, size_t>> matches;
   std::vector<float> angles;
@@ -120,13 +128,16 @@ std::vector<std::pair<size_t, size_t>> SearchForTriangulation(const map::KeyFram
     if (line_norm2 == 0.0) continue;
     int best_dist = feature::kThLow + 1;
     int best_i2 = -1;
-    for (size_t i2 = 0; i2 < kps2.size(); ++i2) {
-      if (used2[i2] || kf2.points[i2]) continue;
+    // The epipolar test first: it is far cheaper than the descriptor distance and leaves a
+    // narrow band of candidates (ORB-SLAM2 narrows them with the BoW vocabulary instead).
+    for (size_t k = 0; k < free2.size(); ++k) {
+      const size_t i2 = free2[k];
+      if (used2[i2]) continue;
+      const double num = line.x() * kps2[i2].pt.x + line.y() * kps2[i2].pt.y + line.z();
+      if (num * num >= tolerance2[k] * line_norm2) continue;
       const int dist =
           feature::DescriptorDistance(kf1.frame.descriptor(i1), kf2.frame.descriptor(i2));
       if (dist >= best_dist) continue;
-      const double num = line.x() * kps2[i2].pt.x + line.y() * kps2[i2].pt.y + line.z();
-      if (num * num / line_norm2 >= 3.84 * kf2.frame.level_sigma2[kps2[i2].octave]) continue;
       best_dist = dist;
       best_i2 = static_cast<int>(i2);
     }
