@@ -26,11 +26,19 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
                                   const std::function<bool()>& more_queued) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto busy = [&] { return more_queued && more_queued(); };
+  TriangulationSearch search;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
     InsertKeyFrame(keyframe);
     CullRecentPoints(keyframe);
-    for (const auto& p : CreateNewMapPoints(map_, keyframe, camera_)) recent_points_.push_back(p);
+    search = PrepareTriangulationSearch(keyframe, camera_);
+  }
+  RunTriangulationSearch(&search, camera_);  // on a snapshot, without the lock
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    for (const auto& p : CreatePointsFromMatches(map_, search, camera_)) {
+      recent_points_.push_back(p);
+    }
   }
   if (!busy()) {
     std::lock_guard<std::mutex> lock(map_->mutex());

@@ -21,9 +21,9 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 
 // Fundamental matrix with x2^T F12 x1 = 0 for pixels x1 in kf1 and x2 in kf2 (ORB-SLAM2's
 // ComputeF12, written with the transform from 1 to 2).
-Eigen::Matrix3d Fundamental(const map::KeyFrame& kf1, const map::KeyFrame& kf2,
+Eigen::Matrix3d Fundamental(const geometry::SE3& T_cam1_world, const geometry::SE3& T_cam2_world,
                             const Eigen::Matrix3d& K) {
-  const geometry::SE3 T_21 = kf2.T_cam_world() * kf1.T_world_cam();
+  const geometry::SE3 T_21 = T_cam2_world * T_cam1_world.Inverse();
   const Eigen::Matrix3d E = Skew(T_21.translation()) * T_21.rotation_matrix();
   const Eigen::Matrix3d K_inv = K.inverse();
   return K_inv.transpose() * E * K_inv;
@@ -104,29 +104,46 @@ void NewPointsOptions::Check() const {
   if (num_neighbours < 1) throw InputError("NewPointsOptions.num_neighbours must be >= 1");
 }
 
-std::vector<std::pair<size_t, size_t>> SearchForTriangulation(const map::KeyFrame& kf1,
-                                                              const map::KeyFrame& kf2,
-                                                              const camera::PinholeCamera& cam) {
-  const Eigen::Matrix3d F = Fundamental(kf1, kf2, cam.K());
-  const auto& kps1 = kf1.frame.keypoints_undistorted;
-  const auto& kps2 = kf2.frame.keypoints_undistorted;
+std::vector<std::pair<size_t, size_t>> SearchForTriangulation(
+    const feature::Frame& frame1, const geometry::SE3& T_cam1_world, const std::vector<bool>& free1,
+    const feature::Frame& frame2, const geometry::SE3& T_cam2_world,
+    const std::vector<bool>& free2_mask, const camera::PinholeCamera& cam) {
+  const Eigen::Matrix3d F = Fundamental(T_cam1_world, T_cam2_world, cam.K());
+  const auto& kps1 = frame1.keypoints_undistorted;
+  const auto& kps2 = frame2.keypoints_undistorted;
+  // Unmatched keypoints of kf2, with their epipolar tolerance 3.84 sigma^2 (chi-square 1 DoF).
+  std::vector<size_t> free2;
+  std::vector<double> x2, y2, tolerance2;  // contiguous, so the band test vectorizes
+  for (size_t i2 = 0; i2 < kps2.size(); ++i2) {
+    if (!free2_mask[i2]) continue;
+    free2.push_back(i2);
+    x2.push_back(kps2[i2].pt.x);
+    y2.push_back(kps2[i2].pt.y);
+    tolerance2.push_back(3.84 * frame2.level_sigma2[kps2[i2].octave]);
+  }
   std::vector<bool> used2(kps2.size(), false);
+  std::vector<size_t> band;
   std::vector<std::pair<size_t, size_t>> matches;
   std::vector<float> angles;
   for (size_t i1 = 0; i1 < kps1.size(); ++i1) {
-    if (kf1.points[i1]) continue;
+    if (!free1[i1]) continue;
     const Eigen::Vector3d line = F * Eigen::Vector3d(kps1[i1].pt.x, kps1[i1].pt.y, 1.0);
     const double line_norm2 = line.x() * line.x() + line.y() * line.y();
     if (line_norm2 == 0.0) continue;
     int best_dist = feature::kThLow + 1;
     int best_i2 = -1;
-    for (size_t i2 = 0; i2 < kps2.size(); ++i2) {
-      if (used2[i2] || kf2.points[i2]) continue;
-      const int dist =
-          feature::DescriptorDistance(kf1.frame.descriptor(i1), kf2.frame.descriptor(i2));
+    // The epipolar test first: it is far cheaper than the descriptor distance and leaves a
+    // narrow band of candidates (ORB-SLAM2 narrows them with the BoW vocabulary instead).
+    band.clear();
+    for (size_t k = 0; k < free2.size(); ++k) {
+      const double num = line.x() * x2[k] + line.y() * y2[k] + line.z();
+      if (num * num < tolerance2[k] * line_norm2) band.push_back(k);
+    }
+    for (size_t k : band) {
+      const size_t i2 = free2[k];
+      if (used2[i2]) continue;
+      const int dist = feature::DescriptorDistance(frame1.descriptor(i1), frame2.descriptor(i2));
       if (dist >= best_dist) continue;
-      const double num = line.x() * kps2[i2].pt.x + line.y() * kps2[i2].pt.y + line.z();
-      if (num * num / line_norm2 >= 3.84 * kf2.frame.level_sigma2[kps2[i2].octave]) continue;
       best_dist = dist;
       best_i2 = static_cast<int>(i2);
     }
@@ -143,17 +160,56 @@ std::vector<std::pair<size_t, size_t>> SearchForTriangulation(const map::KeyFram
   return out;
 }
 
-std::vector<std::shared_ptr<map::MapPoint>> CreateNewMapPoints(
-    map::Map* map, const std::shared_ptr<map::KeyFrame>& kf, const camera::PinholeCamera& cam,
-    const NewPointsOptions& options) {
+namespace {
+std::vector<bool> FreeSlots(const map::KeyFrame& kf) {
+  std::vector<bool> free(kf.points.size());
+  for (size_t i = 0; i < free.size(); ++i) free[i] = !kf.points[i] || kf.points[i]->bad;
+  return free;
+}
+}  // namespace
+
+std::vector<std::pair<size_t, size_t>> SearchForTriangulation(const map::KeyFrame& kf1,
+                                                              const map::KeyFrame& kf2,
+                                                              const camera::PinholeCamera& cam) {
+  return SearchForTriangulation(kf1.frame, kf1.T_cam_world(), FreeSlots(kf1), kf2.frame,
+                                kf2.T_cam_world(), FreeSlots(kf2), cam);
+}
+
+TriangulationSearch PrepareTriangulationSearch(const std::shared_ptr<map::KeyFrame>& kf,
+                                               const camera::PinholeCamera& cam,
+                                               const NewPointsOptions& options) {
   options.Check();
-  std::vector<std::shared_ptr<map::MapPoint>> created;
+  TriangulationSearch search;
+  search.kf = kf;
+  search.T_cam_world = kf->T_cam_world();
+  search.free = FreeSlots(*kf);
   const double stereo_baseline = cam.fx() > 0.0 ? kf->frame.bf / cam.fx() : 0.0;
   for (const auto& kf2 : kf->BestCovisibles(options.num_neighbours)) {
     // Too short a baseline adds nothing over the stereo depth (ORB-SLAM2).
     const double baseline = (kf2->CameraCenter() - kf->CameraCenter()).norm();
     if (stereo_baseline > 0.0 && baseline < stereo_baseline) continue;
-    for (const auto& [i1, i2] : SearchForTriangulation(*kf, *kf2, cam)) {
+    search.neighbours.push_back({kf2, kf2->T_cam_world(), FreeSlots(*kf2), {}});
+  }
+  return search;
+}
+
+void RunTriangulationSearch(TriangulationSearch* search, const camera::PinholeCamera& cam) {
+  for (auto& n : search->neighbours) {
+    n.matches = SearchForTriangulation(search->kf->frame, search->T_cam_world, search->free,
+                                       n.kf->frame, n.T_cam_world, n.free, cam);
+  }
+}
+
+std::vector<std::shared_ptr<map::MapPoint>> CreatePointsFromMatches(
+    map::Map* map, const TriangulationSearch& search, const camera::PinholeCamera& cam) {
+  std::vector<std::shared_ptr<map::MapPoint>> created;
+  const auto& kf = search.kf;
+  if (kf->bad()) return created;
+  for (const auto& n : search.neighbours) {
+    const auto& kf2 = n.kf;
+    if (kf2->bad()) continue;
+    for (const auto& [i1, i2] : n.matches) {
+      // Slots may have been filled since the snapshot (fusion, tracking): re-checked here.
       if (kf->points[i1] || kf2->points[i2]) continue;
       const auto p = Triangulate(*kf, i1, *kf2, i2, cam);
       if (!p || !p->allFinite()) continue;
@@ -170,6 +226,14 @@ std::vector<std::shared_ptr<map::MapPoint>> CreateNewMapPoints(
     }
   }
   return created;
+}
+
+std::vector<std::shared_ptr<map::MapPoint>> CreateNewMapPoints(
+    map::Map* map, const std::shared_ptr<map::KeyFrame>& kf, const camera::PinholeCamera& cam,
+    const NewPointsOptions& options) {
+  TriangulationSearch search = PrepareTriangulationSearch(kf, cam, options);
+  RunTriangulationSearch(&search, cam);
+  return CreatePointsFromMatches(map, search, cam);
 }
 
 }  // namespace moslam::slam

@@ -172,7 +172,7 @@ void Tracker::RefreshLastFrame() {
 }
 
 int Tracker::SearchByProjection(const std::vector<std::shared_ptr<map::MapPoint>>& candidates,
-                                float radius) {
+                                float radius, bool check_right) {
   const feature::Frame& f = current_.frame;
   const float log_scale = f.num_levels() > 1 ? std::log(f.scale_factors[1]) : 1.0f;
   const geometry::SE3& T = current_.T_cam_world;
@@ -195,7 +195,7 @@ int Tracker::SearchByProjection(const std::vector<std::shared_ptr<map::MapPoint>
     pp.pixel = Eigen::Vector2f(u, v);
     pp.octave = p->PredictScale(dist, log_scale, f.num_levels());
     pp.descriptor = p->descriptor.ptr<uint8_t>();
-    pp.u_right = model_.bf > 0.0 ? static_cast<float>(u - model_.bf * inv_z) : -1.0f;
+    pp.u_right = check_right && model_.bf > 0.0 ? static_cast<float>(u - model_.bf * inv_z) : -1.0f;
     projected.push_back(pp);
     which.push_back(k);
   }
@@ -219,10 +219,10 @@ int Tracker::TrackWithMotionModel() {
   for (const auto& p : last_.points) {
     if (p && !p->bad) candidates.push_back(p);
   }
-  int n = SearchByProjection(candidates, kMotionModelRadius);
+  int n = SearchByProjection(candidates, kMotionModelRadius, true);
   if (n < kMinMotionModelMatches) {
     std::fill(current_.points.begin(), current_.points.end(), nullptr);
-    n = SearchByProjection(candidates, 2.0f * kMotionModelRadius);
+    n = SearchByProjection(candidates, 2.0f * kMotionModelRadius, true);
   }
   if (n < kMinMotionModelMatches) return n;
   OptimizeCurrentPose();
@@ -413,7 +413,8 @@ void Tracker::SearchLocalPoints() {
     ++p->visible;
     candidates.push_back(p);
   }
-  SearchByProjection(candidates, kLocalMapRadius);
+  // ORB-SLAM2 checks the right coordinate only in the motion-model search.
+  SearchByProjection(candidates, kLocalMapRadius, false);
 }
 
 bool Tracker::NeedNewKeyFrame() const {

@@ -94,7 +94,7 @@ class Tracker {
   bool NeedNewKeyFrame() const;
   std::shared_ptr<map::KeyFrame> CreateKeyFrame();
   int SearchByProjection(const std::vector<std::shared_ptr<map::MapPoint>>& candidates,
-                         float radius);
+                         float radius, bool check_right);
   void RecordPose(bool ok);
 
   map::Map* map_;
