@@ -10,5 +10,6 @@ void AddEvalCommand(CLI::App& app);
 void AddDatasetCommand(CLI::App& app);
 void AddFeaturesCommand(CLI::App& app);
 void AddCrfCommand(CLI::App& app);
+void AddSynthCommand(CLI::App& app);
 
 }  // namespace moslam::app
