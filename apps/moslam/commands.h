@@ -11,5 +11,6 @@ void AddDatasetCommand(CLI::App& app);
 void AddFeaturesCommand(CLI::App& app);
 void AddCrfCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
+void AddSynthCommand(CLI::App& app);
 
 }  // namespace moslam::app

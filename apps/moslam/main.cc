@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   moslam::app::AddFeaturesCommand(app);
   moslam::app::AddCrfCommand(app);
   moslam::app::AddRunCommand(app);
+  moslam::app::AddSynthCommand(app);
 
   try {
     app.parse(argc, argv);

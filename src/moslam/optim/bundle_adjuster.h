@@ -36,6 +36,10 @@ struct BundleAdjusterOptions {
   double chi2_stereo = kChi2Stereo;
   bool robust = true;  // Huber with delta sqrt(chi2_*) in the first stage
   int num_threads = 1;
+  // Linear solver of the reduced camera system after the points are eliminated (Schur
+  // complement): dense up to this many free poses (a local BA's dozen keyframes: the 6n x 6n
+  // system is small and dense anyway), sparse (SuiteSparse) above.
+  int dense_schur_max_poses = 40;
   void Check() const;  // InputError naming the field
 };
 
@@ -43,9 +47,11 @@ struct BundleResult {
   std::vector<geometry::SE3> T_cam_world;  // every pose (fixed ones unchanged)
   std::vector<Eigen::Vector3d> points_world;
   std::vector<bool> edge_inlier;  // per edge after the second stage (chi2 and positive depth)
+  // 0.5 * sum of squared whitened residuals over the edges that end as inliers, at the input and
+  // at the result (the same edges, so the two are comparable).
   double initial_cost = 0.0;
   double final_cost = 0.0;
-  int iterations = 0;
+  int iterations = 0;  // Levenberg-Marquardt iterations of both stages
 };
 
 // Index out of range or size mismatch: broken invariant (CHECK). An empty problem returns the

@@ -19,9 +19,10 @@ struct PoseOptimizerOptions {
   int iterations_per_round = 10;     // Levenberg-Marquardt iterations per round (ORB-SLAM2: 10)
   double chi2_mono = kChi2Mono;      // outlier threshold on the whitened squared error, 2 DoF
   double chi2_stereo = kChi2Stereo;  // the same, 3 DoF
-  // Rounds that use the Huber loss with delta sqrt(chi2_*); ORB-SLAM2 drops it in the last two
-  // rounds (level >= 2).
-  int robust_rounds = 2;
+  // Rounds (the first ones) that use the Huber loss with delta sqrt(chi2_*). ORB-SLAM2 removes
+  // the kernel while classifying after round 2 (`if(it==2) setRobustKernel(0)`), so its rounds
+  // 0, 1 and 2 are robust and only the last is not: 3.
+  int robust_rounds = 3;
   // Threads Ceres may use (1 for --deterministic runs).
   int num_threads = 1;
   void Check() const;  // InputError naming the field

@@ -1,9 +1,12 @@
 #include "moslam/slam/local_mapper.h"
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <set>
 #include <utility>
+
+#include <spdlog/spdlog.h>
 
 #include "moslam/optim/bundle_adjuster.h"
 #include "moslam/slam/fuse.h"
@@ -153,14 +156,17 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
       problem.edges.push_back(edge);
     }
   }
-#ifdef MOSLAM_HAVE_BUNDLE_ADJUSTER
   optim::BundleAdjusterOptions options;
   options.num_threads = options_.num_threads;
   const optim::BundleResult result = optim::AdjustBundle(problem, options);
-#else
-  return;
-  optim::BundleResult result;
-#endif
+
+  int outliers = 0;
+  for (size_t k = 0; k < edges.size(); ++k) outliers += result.edge_inlier[k] ? 0 : 1;
+  spdlog::debug(
+      "local BA kf {}: {} poses ({} fixed), {} points, {} edges, {} outliers, cost {} -> {}",
+      keyframe->id, poses.size(),
+      std::count(problem.pose_fixed.begin(), problem.pose_fixed.end(), true), points.size(),
+      edges.size(), outliers, result.initial_cost, result.final_cost);
 
   std::lock_guard<std::mutex> lock(map_->mutex());
   for (size_t k = 0; k < edges.size(); ++k) {

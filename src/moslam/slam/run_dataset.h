@@ -18,6 +18,15 @@
 
 namespace moslam::slam {
 
+inline std::string MaskPath(const io::FrameEntry& entry, const std::string& mask_folder) {
+  std::string path = entry.image_left;
+  for (const std::string folder : {"/rgb/", "/image_0/", "/image_2/"}) {
+    const size_t at = path.rfind(folder);
+    if (at != std::string::npos) return path.replace(at, folder.size(), "/" + mask_folder + "/");
+  }
+  return path;
+}
+
 struct DatasetRun {
   std::vector<FrameReport> reports;
   eval::Trajectory estimate;
@@ -27,9 +36,12 @@ struct DatasetRun {
   double track_ms_median = 0.0;  // FrameReport::times.total_ms
 };
 
-// `max_frames` <= 0: all frames.
+// `max_frames` <= 0: all frames. `mask_folder`: when set, each frame's movable-object mask is
+// read from the image path with its "rgb" (or "image_0") folder replaced by this one (the
+// layout of `moslam synth`: rgb/<stamp>.png -> moving/<stamp>.png).
 inline DatasetRun RunDataset(const std::string& folder, const std::string& settings_path,
-                             bool deterministic, int max_frames = 0) {
+                             bool deterministic, int max_frames = 0,
+                             const std::string& mask_folder = "") {
   const io::Sequence sequence = io::ReadDataset(folder);
   SystemOptions options;
   options.sensor = sequence.sensor;
@@ -50,6 +62,7 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
       input.image = images.left;
       input.right = images.right;
       input.depth = images.depth;
+      if (!mask_folder.empty()) input.mask = io::LoadGreyImage(MaskPath(entry, mask_folder));
       run.reports.push_back(system.Track(input));
       if (run.reports.back().state == TrackingState::kOk) ++run.frames_ok;
       total_ms.push_back(run.reports.back().times.total_ms);

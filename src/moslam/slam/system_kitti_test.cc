@@ -47,5 +47,39 @@ TEST(SystemKitti, ThreadedMappingTracksEveryFrame) {
   EXPECT_LT(run.ate_rmse, kMaxAteRmse);
 }
 
+// A frame that cannot be tracked (a black image pair, as from a covered lens) is reported lost
+// with a reason; the run goes on and tracking resumes from the reference keyframe.
+TEST(SystemKitti, LostFrameIsReportedAndTrackingResumes) {
+  MOSLAM_SHARED_OR_SKIP(folder, "data/kitti/06_000000-000050");
+  const io::Sequence sequence = io::ReadDataset(folder);
+  SystemOptions options;
+  options.sensor = sequence.sensor;
+  options.settings = io::LoadOrbSlamSettings("configs/KITTI04-12.yaml", sequence.sensor);
+  options.deterministic = true;
+  System system(options);
+  std::vector<FrameReport> reports;
+  for (int i = 0; i < 12; ++i) {
+    const io::FrameImages images = io::LoadFrameImages(sequence.frames[i], io::ColourMode::kGrey);
+    FrameInput input;
+    input.timestamp = sequence.frames[i].timestamp;
+    input.image = images.left;
+    input.right = images.right;
+    if (i == 8) {
+      input.image = cv::Mat::zeros(images.left.size(), CV_8UC1);
+      input.right = cv::Mat::zeros(images.right.size(), CV_8UC1);
+    }
+    reports.push_back(system.Track(input));
+  }
+  system.Finish();
+  EXPECT_EQ(reports[7].state, TrackingState::kOk);
+  EXPECT_EQ(reports[8].state, TrackingState::kLost);
+  EXPECT_FALSE(reports[8].reason.empty());
+  EXPECT_FALSE(reports[8].T_world_cam.has_value());
+  EXPECT_EQ(reports[9].state, TrackingState::kOk) << reports[9].reason;
+  EXPECT_EQ(reports[11].state, TrackingState::kOk) << reports[11].reason;
+  EXPECT_EQ(system.Summary().lost_frames, 1);
+  EXPECT_EQ(system.CameraTrajectory().size(), 11u);  // the lost frame has no pose
+}
+
 }  // namespace
 }  // namespace moslam::slam

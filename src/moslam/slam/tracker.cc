@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "moslam/feature/matcher.h"
-#include "moslam/optim/pose_optimizer.h"
+#include "moslam/slam/frame_pose.h"
 #include "moslam/util/check.h"
 
 namespace moslam::slam {
@@ -261,23 +261,13 @@ int Tracker::TrackReferenceKeyFrame() {
 int Tracker::OptimizeCurrentPose() {
   std::vector<size_t> index;
   std::vector<Eigen::Vector3d> points;
-  std::vector<optim::Observation> observations;
-  const feature::Frame& f = current_.frame;
   for (size_t i = 0; i < current_.points.size(); ++i) {
     if (!current_.points[i]) continue;
-    const cv::KeyPoint& kp = f.keypoints_undistorted[i];
-    optim::Observation obs;
-    obs.pixel = Eigen::Vector2d(kp.pt.x, kp.pt.y);
-    obs.u_right = f.u_right[i];
-    obs.inv_sigma2 = f.inv_level_sigma2[kp.octave];
     index.push_back(i);
     points.push_back(current_.points[i]->position);
-    observations.push_back(obs);
   }
-  optim::PoseOptimizerOptions options;
-  options.num_threads = options_.num_threads;
-  const optim::PoseOptimizerResult result =
-      optim::OptimizePose(model_, current_.T_cam_world, points, observations, options);
+  const optim::PoseOptimizerResult result = OptimizeFramePose(
+      model_, current_.frame, index, points, current_.T_cam_world, options_.num_threads);
   if (result.num_inliers < 3) return 0;
   current_.T_cam_world = result.T_cam_world;
   for (size_t k = 0; k < index.size(); ++k) current_.outlier[index[k]] = !result.inlier[k];

@@ -1,0 +1,462 @@
+#include "moslam/synth/presets.h"
+
+#include <cmath>
+
+#include <Eigen/Geometry>
+
+#include "moslam/synth/rng.h"
+#include "moslam/util/check.h"
+#include "moslam/util/error.h"
+
+namespace moslam::synth {
+namespace {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+using geometry::SE3;
+
+constexpr double kDeg = M_PI / 180.0;
+// Stream ids that keep the random choices of presets, training scenes and noise apart.
+constexpr uint64_t kStreamScene = 11, kStreamTraining = 0x7121A1;
+
+SE3 At(double x, double y, double z, double yaw = 0.0) {
+  return SE3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Vector3d::UnitZ())), Vector3d(x, y, z));
+}
+
+int Pick(Rng& rng, const TextureSet& set, TextureKind kind) {
+  const auto& list = set.OfKind(kind);
+  MOSLAM_CHECK(!list.empty()) << "no texture of kind " << static_cast<int>(kind);
+  return list[static_cast<size_t>(rng.Index(static_cast<int>(list.size())))];
+}
+
+// Camera looking from `eye` at `target`, world z up: OpenCV axes (x right, y down, z forward).
+SE3 LookAt(const Vector3d& eye, const Vector3d& target) {
+  const Vector3d z = (target - eye).normalized();
+  const Vector3d x = z.cross(Vector3d::UnitZ()).normalized();
+  const Vector3d y = z.cross(x);
+  Eigen::Matrix3d R;
+  R.col(0) = x;
+  R.col(1) = y;
+  R.col(2) = z;
+  return SE3(R, eye);
+}
+
+class Builder {
+ public:
+  Builder(World* world, Rng* rng, const TextureSet* textures)
+      : world_(*world), rng_(*rng), tex_(*textures) {}
+
+  uint16_t NewInstance() { return world_.next_instance++; }
+
+  void Add(const SE3& T, const Vector3d& half, int texture, double tile, uint8_t cls,
+           uint16_t instance, float tint = 1.0f) {
+    Box b;
+    b.T_world_box = T;
+    b.half = half;
+    b.texture = texture;
+    b.tile_m = tile;
+    b.class_id = cls;
+    b.instance = instance;
+    b.tint = tint;
+    b.uv_offset = Vector2d(rng_.Uniform(), rng_.Uniform());
+    world_.static_boxes.push_back(b);
+  }
+
+  // Walls, floor and ceiling of a room [-w/2, w/2] x [-d/2, d/2] x [0, h], seen from inside.
+  void Room(double w, double d, double h) {
+    const int wall = Pick(rng_, tex_, TextureKind::kWall);
+    const int wall2 = Pick(rng_, tex_, TextureKind::kWall);
+    const double t = 0.1;
+    Add(At(0, 0, -t), {w / 2 + t, d / 2 + t, t}, Pick(rng_, tex_, TextureKind::kFloor), 1.2,
+        kBackground, 0);
+    Add(At(0, 0, h + t), {w / 2 + t, d / 2 + t, t}, Pick(rng_, tex_, TextureKind::kCeiling), 1.5,
+        kBackground, 0, 0.9f);
+    Add(At(0, d / 2 + t, h / 2), {w / 2, t, h / 2}, wall, 1.6, kBackground, 0);
+    Add(At(0, -d / 2 - t, h / 2), {w / 2, t, h / 2}, wall, 1.6, kBackground, 0);
+    Add(At(w / 2 + t, 0, h / 2), {t, d / 2, h / 2}, wall2, 1.6, kBackground, 0, 0.95f);
+    Add(At(-w / 2 - t, 0, h / 2), {t, d / 2, h / 2}, wall2, 1.6, kBackground, 0, 0.95f);
+    // Posters and boards along the walls (a lab is cluttered: TUM's fr3 office has many).
+    for (int i = 0; i < 10; ++i) {
+      const int side = i % 4;
+      const double pw = rng_.Uniform(0.4, 1.1), ph = rng_.Uniform(0.4, 0.9);
+      const double z = rng_.Uniform(1.0, h - 0.6);
+      const double along = rng_.Uniform(-0.4, 0.4);
+      const int poster = Pick(rng_, tex_, TextureKind::kPoster);
+      if (side < 2) {
+        const double y = side == 0 ? d / 2 - 0.01 : -d / 2 + 0.01;
+        Add(At(along * w, y, z), {pw / 2, 0.008, ph / 2}, poster, 0.0, kBackground, 0);
+      } else {
+        const double x = side == 2 ? w / 2 - 0.01 : -w / 2 + 0.01;
+        Add(At(x, along * d, z), {0.008, pw / 2, ph / 2}, poster, 0.0, kBackground, 0);
+      }
+    }
+  }
+
+  // A desk (diningtable) at (x, y) with yaw, and optionally a monitor on it.
+  void Desk(double x, double y, double yaw, bool monitor) {
+    const uint16_t id = NewInstance();
+    const int wood = Pick(rng_, tex_, TextureKind::kWood);
+    const double l = rng_.Uniform(1.2, 1.8), dd = rng_.Uniform(0.7, 0.9), hh = 0.74;
+    const SE3 T = At(x, y, 0, yaw);
+    Add(T * At(0, 0, hh - 0.02), {l / 2, dd / 2, 0.02}, wood, 0.8, kDiningTable, id);
+    for (int i = 0; i < 4; ++i) {
+      const double lx = (i < 2 ? 1 : -1) * (l / 2 - 0.05), ly = (i % 2 ? 1 : -1) * (dd / 2 - 0.05);
+      Add(T * At(lx, ly, (hh - 0.04) / 2), {0.03, 0.03, (hh - 0.04) / 2}, wood, 0.5, kDiningTable,
+          id, 0.7f);
+    }
+    // Clutter on the desk: books and boxes (background).
+    for (int i = 0; i < 3; ++i) {
+      Add(T * At(rng_.Uniform(-l / 2 + 0.2, l / 2 - 0.2), rng_.Uniform(-dd / 4, dd / 4), hh + 0.04,
+                 rng_.Uniform(0, M_PI)),
+          {rng_.Uniform(0.08, 0.18), rng_.Uniform(0.06, 0.12), 0.04},
+          Pick(rng_, tex_, TextureKind::kPoster), 0.0, kBackground, 0);
+    }
+    if (monitor) {
+      const uint16_t mid = NewInstance();
+      const double mw = rng_.Uniform(0.45, 0.6), mh = mw * 0.62;
+      const SE3 Tm = T * At(rng_.Uniform(-0.2, 0.2), dd / 2 - 0.2, hh, rng_.Uniform(-0.2, 0.2));
+      Add(Tm * At(0, 0, 0.12 + mh / 2), {mw / 2, 0.025, mh / 2},
+          Pick(rng_, tex_, TextureKind::kPoster), 0.0, kTvMonitor, mid);
+      Add(Tm * At(0, 0.02, 0.06), {0.03, 0.02, 0.06}, Pick(rng_, tex_, TextureKind::kHair), 0.2,
+          kTvMonitor, mid, 0.5f);
+      Add(Tm * At(0, 0.02, 0.005), {0.12, 0.08, 0.005}, Pick(rng_, tex_, TextureKind::kHair), 0.2,
+          kTvMonitor, mid, 0.5f);
+    }
+  }
+
+  // A chair at (x, y) facing yaw (its seat's front points along yaw).
+  void Chair(double x, double y, double yaw) {
+    const uint16_t id = NewInstance();
+    const int fabric = Pick(rng_, tex_, TextureKind::kTrousers);
+    const SE3 T = At(x, y, 0, yaw);
+    Add(T * At(0, 0, 0.45), {0.23, 0.23, 0.03}, fabric, 0.3, kChair, id);
+    Add(T * At(-0.22, 0, 0.75), {0.03, 0.22, 0.27}, fabric, 0.3, kChair, id);
+    Add(T * At(0, 0, 0.22), {0.03, 0.03, 0.21}, fabric, 0.3, kChair, id, 0.4f);
+    Add(T * At(0, 0, 0.02), {0.28, 0.05, 0.02}, fabric, 0.3, kChair, id, 0.4f);
+    Add(T * At(0, 0, 0.02), {0.05, 0.28, 0.02}, fabric, 0.3, kChair, id, 0.4f);
+  }
+
+  // A shelf of books against a wall (background class).
+  void Shelf(const SE3& T, double width, double height) {
+    const int wood = Pick(rng_, tex_, TextureKind::kWood);
+    const double depth = 0.35;
+    Add(T * At(0, 0, height / 2), {depth / 2, width / 2, 0.02}, wood, 0.6, kBackground, 0);
+    const int levels = 4;
+    for (int i = 0; i <= levels; ++i) {
+      const double z = i * height / levels;
+      Add(T * At(0, 0, z + 0.01), {depth / 2, width / 2, 0.015}, wood, 0.6, kBackground, 0);
+      if (i == levels) break;
+      double yy = -width / 2 + 0.03;
+      while (yy < width / 2 - 0.05) {
+        const double bw = rng_.Uniform(0.025, 0.07),
+                     bh = rng_.Uniform(0.18, height / levels - 0.04);
+        Add(T * At(0, yy + bw / 2, z + 0.025 + bh / 2), {depth / 2 - 0.04, bw / 2, bh / 2},
+            Pick(rng_, tex_, TextureKind::kPoster), 0.0, kBackground, 0,
+            static_cast<float>(rng_.Uniform(0.6, 1.1)));
+        yy += bw + 0.004;
+      }
+    }
+    Add(T * At(depth / 2 - 0.01, -width / 2, height / 2), {depth / 2, 0.015, height / 2}, wood, 0.6,
+        kBackground, 0);
+    Add(T * At(depth / 2 - 0.01, width / 2, height / 2), {depth / 2, 0.015, height / 2}, wood, 0.6,
+        kBackground, 0);
+  }
+
+  PersonLook Look() {
+    PersonLook look;
+    look.shirt = Pick(rng_, tex_, TextureKind::kClothing);
+    look.trousers = Pick(rng_, tex_, TextureKind::kTrousers);
+    look.skin = Pick(rng_, tex_, TextureKind::kSkin);
+    look.hair = Pick(rng_, tex_, TextureKind::kHair);
+    look.shoes = Pick(rng_, tex_, TextureKind::kHair);
+    look.height_m = rng_.Uniform(1.6, 1.9);
+    return look;
+  }
+
+  void AddPerson(const Person& p) {
+    Actor a;
+    a.instance = NewInstance();
+    a.is_person = true;
+    a.person = p;
+    world_.actors.push_back(a);
+  }
+
+  void AddCar(const Car& c) {
+    Actor a;
+    a.instance = NewInstance();
+    a.is_person = false;
+    a.car = c;
+    world_.actors.push_back(a);
+  }
+
+  Rng& rng() { return rng_; }
+  const TextureSet& textures() const { return tex_; }
+
+ private:
+  World& world_;
+  Rng& rng_;
+  const TextureSet& tex_;
+};
+
+// The office: a 6 x 6 x 2.8 m room, the camera near the south wall (y = -2.4) looking north at a
+// desk group where people walk and sit, as in TUM's fr3 walking/sitting sequences.
+constexpr double kRoomW = 6.0, kRoomD = 6.0, kRoomH = 2.8;
+
+void BuildOffice(Builder& b, bool walking, bool seated) {
+  Rng& rng = b.rng();
+  b.Room(kRoomW, kRoomD, kRoomH);
+  // Desk group in the middle-back of the room, chairs behind it (the sitters face the camera).
+  const double desk_y = 1.0 + rng.Uniform(-0.1, 0.1);
+  b.Desk(-0.9, desk_y, 0.0, true);
+  b.Desk(0.9, desk_y, 0.0, true);
+  b.Chair(-0.9, desk_y + 0.75, -M_PI / 2);
+  b.Chair(0.9, desk_y + 0.75, -M_PI / 2);
+  b.Desk(-2.4, -0.6, M_PI / 2, rng.Uniform() < 0.5);
+  b.Desk(2.4, 0.2, -M_PI / 2, true);
+  b.Shelf(At(-kRoomW / 2 + 0.2, 1.6, 0), 1.6, 2.0);
+  b.Shelf(At(kRoomW / 2 - 0.2, -1.4, 0, M_PI), 1.4, 1.8);
+  b.Shelf(At(0.0, kRoomD / 2 - 0.2, 0, -M_PI / 2), 2.0, 1.9);
+  // Boxes on the floor and a cabinet.
+  for (int i = 0; i < 4; ++i) {
+    const double s = rng.Uniform(0.2, 0.45);
+    b.Add(At(rng.Uniform(-2.6, 2.6), rng.Uniform(2.0, 2.6), s, rng.Uniform(0, M_PI)), {s, s, s},
+          Pick(rng, b.textures(), TextureKind::kPoster), 0.0, kBackground, 0);
+  }
+  if (seated) {
+    // Two people at the desks facing the camera (-y), as in fr3 sitting_static.
+    for (int i = 0; i < 2; ++i) {
+      b.AddPerson(Person::Seated(b.Look(), Vector2d(i == 0 ? -0.9 : 0.9, desk_y + 0.7), -M_PI / 2,
+                                 0.5, rng.Uniform(0, 100)));
+    }
+  }
+  if (walking) {
+    // Two people walking loops that cross in front of the camera at 1-2 m (covering 20-60 % of
+    // the view there) and go round the desks behind, in opposite directions.
+    const double near = -0.8 + rng.Uniform(-0.2, 0.2);
+    std::vector<Vector2d> a = {
+        {-2.0, near}, {1.9, near + 0.2}, {1.9, desk_y + 1.0}, {-1.9, desk_y + 1.0}};
+    std::vector<Vector2d> c = {{1.7, near + 0.7}, {-1.7, near + 0.5}, {-1.7, -1.4}, {1.7, -1.3}};
+    b.AddPerson(Person::Walking(b.Look(), a, rng.Uniform(0.8, 1.1), rng.Uniform(0, 5)));
+    b.AddPerson(Person::Walking(b.Look(), c, rng.Uniform(0.7, 1.0), rng.Uniform(0, 5)));
+  }
+}
+
+// Sum of sinusoids with seeded phases: smooth like a hand-held camera, not periodic at first sight.
+struct Wobble {
+  double amp[3], period[3], phase[3];
+  Wobble(Rng& rng, double amplitude, double min_period, double max_period) {
+    for (int i = 0; i < 3; ++i) {
+      amp[i] = amplitude * (i == 0 ? 1.0 : 0.3 / i);
+      period[i] = rng.Uniform(min_period, max_period) / (i + 1);
+      phase[i] = rng.Uniform(0, 2 * M_PI);
+    }
+  }
+  double operator()(double t) const {
+    double v = 0.0;
+    for (int i = 0; i < 3; ++i) v += amp[i] * std::sin(2 * M_PI * t / period[i] + phase[i]);
+    return v;
+  }
+};
+
+SE3 Rotate(const SE3& T, double rx, double ry, double rz) {
+  const Eigen::Quaterniond q = Eigen::AngleAxisd(rz, Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(ry, Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(rx, Vector3d::UnitX());
+  return SE3(T.rotation() * q, T.translation());
+}
+
+std::function<SE3(double)> IndoorTrajectory(const std::string& name, Rng& rng) {
+  // Sitting: closer, so the seated people are ~2.5 m away as in fr3 sitting_static.
+  const double eye_y = name == "s_static" ? -1.0 : -2.3;
+  const Vector3d eye(rng.Uniform(-0.2, 0.2), eye_y, 1.45 + rng.Uniform(-0.1, 0.1));
+  const Vector3d target(0.0, 1.0, 1.15);
+  const SE3 base = LookAt(eye, target);
+  std::array<Wobble, 3> pos = {Wobble(rng, 1, 6, 10), Wobble(rng, 1, 6, 10), Wobble(rng, 1, 6, 10)};
+  std::array<Wobble, 3> rot = {Wobble(rng, 1, 5, 9), Wobble(rng, 1, 5, 9), Wobble(rng, 1, 5, 9)};
+  auto jitter = [pos, rot](double t, double p_amp, double r_amp, const SE3& T) {
+    const Vector3d d(pos[0](t) * p_amp, pos[1](t) * p_amp, pos[2](t) * p_amp);
+    const SE3 moved(T.rotation(), T.translation() + d);
+    return Rotate(moved, rot[0](t) * r_amp, rot[1](t) * r_amp, rot[2](t) * r_amp);
+  };
+  if (name == "w_xyz") {  // translation along the axes, ~±0.4 m, little rotation
+    return [=](double t) { return jitter(t, 0.4, 1.5 * kDeg, base); };
+  }
+  if (name == "w_static" || name == "s_static") {  // nearly still: mm and sub-degree jitter
+    return [=](double t) { return jitter(t, 0.003, 0.25 * kDeg, base); };
+  }
+  if (name == "w_rpy") {  // rotation about the camera axes, ±25 degrees, a few cm of translation
+    return [=](double t) { return jitter(t, 0.03, 25 * kDeg, base); };
+  }
+  if (name == "w_halfsphere") {  // on a half sphere of 1 m diameter, looking at the room centre
+    const Vector3d centre = eye + Vector3d(0, 0.5, 0);
+    const double p1 = rng.Uniform(9, 12), p2 = rng.Uniform(6, 8), ph = rng.Uniform(0, 2 * M_PI);
+    return [=](double t) {
+      const double az = 60 * kDeg * std::sin(2 * M_PI * t / p1 + ph);
+      const double el = 30 * kDeg + 30 * kDeg * std::sin(2 * M_PI * t / p2);
+      const Vector3d dir(std::sin(az) * std::cos(el), -std::cos(az) * std::cos(el), std::sin(el));
+      return LookAt(centre + 0.5 * dir, target);
+    };
+  }
+  MOSLAM_CHECK(false) << "no trajectory for " << name;
+  return {};
+}
+
+// A street along +x: road, pavements, facades on both sides, cars in both lanes and parked.
+void BuildStreet(Builder& b) {
+  Rng& rng = b.rng();
+  const TextureSet& tex = b.textures();
+  const double length = 400.0;
+  b.Add(At(length / 2 - 20, 0, -0.1), {length / 2 + 20, 5.0, 0.1},
+        Pick(rng, tex, TextureKind::kRoad), 3.0, kBackground, 0);
+  for (int side = -1; side <= 1; side += 2) {
+    b.Add(At(length / 2 - 20, side * 7.0, 0.0), {length / 2 + 20, 2.0, 0.12},
+          Pick(rng, tex, TextureKind::kFloor), 1.5, kBackground, 0);
+    double x = -20.0;
+    while (x < length) {
+      const double w = rng.Uniform(8, 20), h = rng.Uniform(6, 18), d = rng.Uniform(6, 10);
+      b.Add(At(x + w / 2, side * (9.0 + d / 2), h / 2), {w / 2, d / 2, h / 2},
+            Pick(rng, tex, TextureKind::kFacade), rng.Uniform() < 0.5 ? 0.0 : 6.0, kBackground, 0);
+      x += w + rng.Uniform(0.0, 2.0);
+    }
+    // Poles and signs: vertical structure near the road.
+    for (double px = 5.0; px < length; px += rng.Uniform(15, 30)) {
+      b.Add(At(px, side * 6.0, 1.5), {0.08, 0.08, 1.5}, Pick(rng, tex, TextureKind::kHair), 0.5,
+            kBackground, 0);
+    }
+  }
+  auto car = [&](double x, double y, double heading, double speed) {
+    Car c;
+    c.start = Vector2d(x, y);
+    c.heading = heading;
+    c.speed = speed;
+    c.paint = Pick(rng, tex, TextureKind::kCarPaint);
+    c.glass = Pick(rng, tex, TextureKind::kPoster);
+    c.tyre = Pick(rng, tex, TextureKind::kHair);
+    c.size = Vector3d(rng.Uniform(3.8, 4.8), rng.Uniform(1.7, 1.9), rng.Uniform(1.4, 1.6));
+    b.AddCar(c);
+  };
+  for (int i = 0; i < 4; ++i) car(15 + 25 * i + rng.Uniform(0, 8), -2.2, 0.0, rng.Uniform(9, 12));
+  for (int i = 0; i < 6; ++i) car(40 + 40 * i + rng.Uniform(0, 10), 2.2, M_PI, rng.Uniform(8, 12));
+  for (int i = 0; i < 8; ++i) {  // parked: movable but not moving
+    car(20 + 35 * i + rng.Uniform(0, 10), (i % 2 ? 1 : -1) * 4.3, i % 2 ? M_PI : 0.0, 0.0);
+  }
+}
+
+}  // namespace
+
+const std::vector<PresetInfo>& Presets() {
+  static const std::vector<PresetInfo> kPresets = {
+      {"w_xyz", "two people walking, camera translating along x, y, z (fr3 walking_xyz)", false,
+       859, 30.0},
+      {"w_static", "two people walking, camera nearly still (fr3 walking_static)", false, 743,
+       30.0},
+      {"w_rpy", "two people walking, camera rotating about its axes (fr3 walking_rpy)", false, 910,
+       30.0},
+      {"w_halfsphere", "two people walking, camera on a 1 m half sphere (fr3 walking_halfsphere)",
+       false, 1067, 30.0},
+      {"s_static", "two people seated and gesturing, camera nearly still (fr3 sitting_static)",
+       false, 707, 30.0},
+      {"kitti_cars", "street with moving and parked cars, stereo car driving at ~8 m/s", true, 400,
+       10.0},
+  };
+  return kPresets;
+}
+
+const PresetInfo& FindPreset(const std::string& name) {
+  std::string known;
+  for (const PresetInfo& p : Presets()) {
+    if (p.name == name) return p;
+    known += (known.empty() ? "" : ", ") + p.name;
+  }
+  ThrowInput("unknown preset '{}' (known: {})", name, known);
+}
+
+camera::PinholeOptions TumCamera(int width, int height) {
+  const double s = width / 640.0, sy = height / 480.0;
+  camera::PinholeOptions c;
+  c.fx = 535.4 * s;
+  c.fy = 539.2 * sy;
+  c.cx = (320.1 + 0.5) * s - 0.5;
+  c.cy = (247.6 + 0.5) * sy - 0.5;
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
+camera::PinholeOptions KittiCamera(int width, int height) {
+  const double s = width / 1226.0, sy = height / 370.0;
+  camera::PinholeOptions c;
+  c.fx = 707.0912 * s;
+  c.fy = 707.0912 * sy;
+  c.cx = (601.8873 + 0.5) * s - 0.5;
+  c.cy = (183.1104 + 0.5) * sy - 0.5;
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
+SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet& textures,
+                        int width, int height) {
+  SequenceSpec spec;
+  spec.info = FindPreset(name);
+  Rng rng(seed, kStreamScene + static_cast<uint64_t>(&FindPreset(name) - Presets().data()));
+  Builder b(&spec.world, &rng, &textures);
+  if (spec.info.stereo) {
+    spec.camera = KittiCamera(width > 0 ? width : 1226, height > 0 ? height : 370);
+    spec.baseline_m = 0.537;
+    BuildStreet(b);
+    spec.lighting.direction_world = Vector3d(0.3, 0.5, -0.8);
+    spec.lighting.ambient = 0.6f;
+    const double speed = rng.Uniform(7, 9), lane = -2.2;
+    std::array<Wobble, 2> sway = {Wobble(rng, 0.05, 4, 8), Wobble(rng, 0.02, 3, 6)};
+    spec.T_world_cam = [speed, lane, sway](double t) {
+      const Vector3d eye(speed * t, lane + sway[0](t), 1.65);
+      return Rotate(LookAt(eye, eye + Vector3d(10, 0, -0.3)), 0, sway[1](t), 0);
+    };
+    return spec;
+  }
+  spec.camera = TumCamera(width > 0 ? width : 640, height > 0 ? height : 480);
+  BuildOffice(b, name != "s_static", name == "s_static");
+  spec.T_world_cam = IndoorTrajectory(name, rng);
+  return spec;
+}
+
+SequenceSpec MakeTrainingScene(uint64_t seed, const TextureSet& textures, int width, int height) {
+  SequenceSpec spec;
+  spec.info = {"train", "independent training frame", false, 1, 30.0};
+  Rng rng(seed, kStreamTraining);
+  Builder b(&spec.world, &rng, &textures);
+  const double w = rng.Uniform(4, 8), d = rng.Uniform(4, 8), h = rng.Uniform(2.4, 3.2);
+  b.Room(w, d, h);
+  const int desks = rng.Index(4);
+  for (int i = 0; i < desks; ++i) {
+    const double x = rng.Uniform(-w / 2 + 1, w / 2 - 1), y = rng.Uniform(-d / 2 + 1, d / 2 - 1);
+    b.Desk(x, y, rng.Uniform(0, M_PI), rng.Uniform() < 0.6);
+  }
+  for (int i = rng.Index(4); i > 0; --i) {
+    b.Chair(rng.Uniform(-w / 2 + 0.5, w / 2 - 0.5), rng.Uniform(-d / 2 + 0.5, d / 2 - 0.5),
+            rng.Uniform(0, 2 * M_PI));
+  }
+  if (rng.Uniform() < 0.7) b.Shelf(At(-w / 2 + 0.2, rng.Uniform(-1, 1), 0), 1.4, 1.9);
+  const int people = rng.Index(4);
+  for (int i = 0; i < people; ++i) {
+    const Vector2d p(rng.Uniform(-w / 2 + 0.6, w / 2 - 0.6), rng.Uniform(-d / 4, d / 2 - 0.6));
+    if (rng.Uniform() < 0.3) {
+      b.Chair(p.x(), p.y(), rng.Uniform(0, 2 * M_PI));
+      b.AddPerson(Person::Seated(b.Look(), p, rng.Uniform(0, 2 * M_PI), 0.5, rng.Uniform(0, 100)));
+    } else {
+      const double heading = rng.Uniform(0, 2 * M_PI);
+      const Vector2d dir(std::cos(heading), std::sin(heading));
+      b.AddPerson(Person::Walking(b.Look(), {p - dir, p + dir}, 1.0, rng.Uniform(0, 4)));
+    }
+  }
+  spec.camera = TumCamera(width, height);
+  const Vector3d eye(rng.Uniform(-w / 2 + 0.5, w / 2 - 0.5), -d / 2 + rng.Uniform(0.4, 1.2),
+                     rng.Uniform(0.8, 1.9));
+  const Vector3d target(rng.Uniform(-w / 4, w / 4), rng.Uniform(0, d / 2), rng.Uniform(0.3, 1.4));
+  const SE3 pose = Rotate(LookAt(eye, target), 0, 0, rng.Uniform(-0.2, 0.2));
+  spec.T_world_cam = [pose](double) { return pose; };
+  return spec;
+}
+
+}  // namespace moslam::synth
