@@ -1,0 +1,66 @@
+#include "moslam/map/map.h"
+
+#include <utility>
+
+namespace moslam::map {
+
+std::shared_ptr<KeyFrame> Map::CreateKeyFrame(feature::Frame frame,
+                                              const geometry::SE3& T_cam_world) {
+  auto kf = std::make_shared<KeyFrame>(next_keyframe_id_++, std::move(frame), T_cam_world);
+  keyframes_[kf->id] = kf;
+  return kf;
+}
+
+std::shared_ptr<MapPoint> Map::CreateMapPoint(const Eigen::Vector3d& position,
+                                              const std::shared_ptr<KeyFrame>& reference) {
+  auto p = std::make_shared<MapPoint>(next_point_id_++, position, reference, reference->id);
+  points_[p->id] = p;
+  return p;
+}
+
+void Map::EraseMapPoint(const std::shared_ptr<MapPoint>& point) {
+  if (!point) return;
+  point->bad = true;
+  for (const auto& [kf_id, obs] : point->observations()) {
+    auto kf = obs.keyframe.lock();
+    if (kf && obs.index < kf->points.size() && kf->points[obs.index] == point) {
+      kf->points[obs.index] = nullptr;
+    }
+  }
+  points_.erase(point->id);
+}
+
+void Map::EraseKeyFrame(const std::shared_ptr<KeyFrame>& keyframe) {
+  if (!keyframe || !keyframe->parent()) return;  // the first keyframe stays
+  for (const auto& p : keyframe->SetBad(keyframes_)) EraseMapPoint(p);
+  keyframes_.erase(keyframe->id);
+}
+
+void Map::Replace(const std::shared_ptr<MapPoint>& old_point,
+                  const std::shared_ptr<MapPoint>& new_point) {
+  if (!old_point || !new_point || old_point == new_point || old_point->bad) return;
+  const auto observations = old_point->observations();
+  for (const auto& [kf_id, obs] : observations) {
+    auto kf = obs.keyframe.lock();
+    if (!kf) continue;
+    if (!new_point->IsObservedBy(kf_id)) {
+      kf->points[obs.index] = new_point;
+      new_point->AddObservation(kf, obs.index);
+    } else {
+      kf->points[obs.index] = nullptr;
+    }
+  }
+  new_point->found += old_point->found;
+  new_point->visible += old_point->visible;
+  new_point->ComputeDistinctiveDescriptor();
+  old_point->replaced_by = new_point;
+  old_point->bad = true;
+  points_.erase(old_point->id);
+}
+
+std::shared_ptr<KeyFrame> Map::keyframe(uint64_t id) const {
+  auto it = keyframes_.find(id);
+  return it == keyframes_.end() ? nullptr : it->second;
+}
+
+}  // namespace moslam::map

@@ -1,0 +1,55 @@
+// The map (ORB-SLAM2's Map, Mur-Artal & Tardós 2017): it owns keyframes and map points
+// (shared_ptr; back-references elsewhere are weak_ptr or ids) and the one mutex that guards them.
+//
+// Locking design (one mutex, provably free of lock-order problems): every mutable field of
+// KeyFrame, MapPoint and Map is read and written only while Map::mutex() is held. Tracking takes
+// it for each of its map-reading steps and for keyframe creation; local mapping takes it for each
+// modification step. Bundle adjustment copies the problem into plain structs under the lock,
+// solves without it, and writes the result back under it, skipping entities that were erased in
+// between. No other mutex is ever taken while holding this one, except the keyframe queue's
+// (which never calls back), so there is no lock-order cycle.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "moslam/map/keyframe.h"
+#include "moslam/map/map_point.h"
+
+namespace moslam::map {
+
+class Map {
+ public:
+  std::mutex& mutex() const { return mutex_; }
+
+  // Ids are unique and increasing over the run; the first keyframe gets id 0.
+  std::shared_ptr<KeyFrame> CreateKeyFrame(feature::Frame frame, const geometry::SE3& T_cam_world);
+  std::shared_ptr<MapPoint> CreateMapPoint(const Eigen::Vector3d& position,
+                                           const std::shared_ptr<KeyFrame>& reference);
+
+  // Sets the point bad, drops its observations from the keyframes and removes it.
+  void EraseMapPoint(const std::shared_ptr<MapPoint>& point);
+  // SetBad on the keyframe, then removes it and the points it orphaned.
+  void EraseKeyFrame(const std::shared_ptr<KeyFrame>& keyframe);
+  // Fuses `old_point` into `new_point`: observations move (unless the keyframe already sees
+  // new_point), counters add up, old_point is erased and remembers its replacement.
+  void Replace(const std::shared_ptr<MapPoint>& old_point,
+               const std::shared_ptr<MapPoint>& new_point);
+
+  const std::map<uint64_t, std::shared_ptr<KeyFrame>>& keyframes() const { return keyframes_; }
+  const std::map<uint64_t, std::shared_ptr<MapPoint>>& points() const { return points_; }
+  std::shared_ptr<KeyFrame> keyframe(uint64_t id) const;
+  uint64_t next_keyframe_id() const { return next_keyframe_id_; }
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<uint64_t, std::shared_ptr<KeyFrame>> keyframes_;
+  std::map<uint64_t, std::shared_ptr<MapPoint>> points_;
+  uint64_t next_keyframe_id_ = 0;
+  uint64_t next_point_id_ = 0;
+};
+
+}  // namespace moslam::map

@@ -1,0 +1,59 @@
+// Local mapping (ORB-SLAM2's LocalMapping, Mur-Artal & Tardós 2017), one keyframe at a time:
+// insert the keyframe (observations of the points tracking matched, covisibility update), cull
+// recent map points (found/visible ratio, too few observations), triangulate new points with
+// covisible keyframes (slam/new_points.h), fuse duplicates in the neighbours (slam/fuse.h), local
+// bundle adjustment (optim::AdjustBundle) and redundant-keyframe culling
+// (slam/keyframe_culling.h).
+//
+// ProcessKeyFrame is a synchronous step: System calls it in its mapping thread, or directly after
+// each new keyframe in deterministic mode. It takes Map::mutex() for each step; bundle adjustment
+// is copied out under the lock, solved without it and written back under it, skipping keyframes
+// and points erased in between (map/map.h). Scratch state (the recent-points list) lives here.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "moslam/camera/pinhole_camera.h"
+#include "moslam/map/map.h"
+#include "moslam/optim/observation.h"
+
+namespace moslam::slam {
+
+struct LocalMapperOptions {
+  double close_depth = 0.0;  // metres (settings.CloseDepthMetres()), for keyframe culling
+  bool local_bundle_adjustment = true;
+  bool keyframe_culling = true;
+  int num_threads = 1;  // Ceres threads in bundle adjustment
+};
+
+class LocalMapper {
+ public:
+  LocalMapper(map::Map* map, const camera::PinholeCamera& camera, double bf,
+              const LocalMapperOptions& options);
+
+  // `more_queued` (may be empty) says whether further keyframes wait; fusion and bundle
+  // adjustment are then skipped to catch up, as ORB-SLAM2 does.
+  void ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe,
+                       const std::function<bool()>& more_queued = {});
+
+  // Milliseconds per processed keyframe (thread-safe copy).
+  std::vector<double> StepTimes() const;
+
+ private:
+  void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe);
+  void CullRecentPoints(const std::shared_ptr<map::KeyFrame>& keyframe);
+  void LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& keyframe);
+
+  map::Map* map_;
+  camera::PinholeCamera camera_;
+  optim::CameraModel model_;
+  LocalMapperOptions options_;
+  std::vector<std::weak_ptr<map::MapPoint>> recent_points_;
+  mutable std::mutex stats_mutex_;
+  std::vector<double> step_ms_;
+};
+
+}  // namespace moslam::slam

@@ -1,0 +1,92 @@
+// Test and tool support (not used by the library): runs slam::System over a data-set folder and
+// scores the camera trajectory against the ground truth with the TUM-convention ATE (SE(3)
+// alignment). apps/moslam's `run` command is the user-facing path; this is the small loop the
+// end-to-end tests and tools/slam_eval need.
+#pragma once
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "moslam/eval/ate.h"
+#include "moslam/eval/statistics.h"
+#include "moslam/eval/trajectory_io.h"
+#include "moslam/io/dataset.h"
+#include "moslam/io/image.h"
+#include "moslam/io/orbslam_settings.h"
+#include "moslam/slam/system.h"
+
+namespace moslam::slam {
+
+inline std::string MaskPath(const io::FrameEntry& entry, const std::string& mask_folder) {
+  std::string path = entry.image_left;
+  for (const std::string folder : {"/rgb/", "/image_0/", "/image_2/"}) {
+    const size_t at = path.rfind(folder);
+    if (at != std::string::npos) return path.replace(at, folder.size(), "/" + mask_folder + "/");
+  }
+  return path;
+}
+
+struct DatasetRun {
+  std::vector<FrameReport> reports;
+  eval::Trajectory estimate;
+  MapSummary summary;
+  int frames_ok = 0;
+  double ate_rmse = -1.0;        // metres; < 0 without ground truth
+  double track_ms_median = 0.0;  // FrameReport::times.total_ms
+};
+
+// `max_frames` <= 0: all frames. `mask_folder`: when set, each frame's movable-object mask is
+// read from the image path with its "rgb" (or "image_0") folder replaced by this one (the
+// layout of `moslam synth`: rgb/<stamp>.png -> moving/<stamp>.png).
+inline DatasetRun RunDataset(const std::string& folder, const std::string& settings_path,
+                             bool deterministic, int max_frames = 0,
+                             const std::string& mask_folder = "") {
+  const io::Sequence sequence = io::ReadDataset(folder);
+  SystemOptions options;
+  options.sensor = sequence.sensor;
+  options.settings = io::LoadOrbSlamSettings(settings_path, sequence.sensor);
+  options.deterministic = deterministic;
+  DatasetRun run;
+  std::vector<double> total_ms;
+  {
+    System system(options);
+    const size_t n =
+        max_frames > 0 ? std::min<size_t>(max_frames, sequence.size()) : sequence.size();
+    for (size_t i = 0; i < n; ++i) {
+      const io::FrameEntry& entry = sequence.frames[i];
+      const io::FrameImages images =
+          io::LoadFrameImages(entry, io::ColourMode::kGrey, options.settings.depth_map_factor);
+      FrameInput input;
+      input.timestamp = entry.timestamp;
+      input.image = images.left;
+      input.right = images.right;
+      input.depth = images.depth;
+      if (!mask_folder.empty()) input.mask = io::LoadGreyImage(MaskPath(entry, mask_folder));
+      run.reports.push_back(system.Track(input));
+      if (run.reports.back().state == TrackingState::kOk) ++run.frames_ok;
+      total_ms.push_back(run.reports.back().times.total_ms);
+    }
+    system.Finish();
+    run.estimate = system.CameraTrajectory();
+    run.summary = system.Summary();
+  }
+  run.track_ms_median = eval::Median(total_ms);
+  if (sequence.ground_truth_path && run.estimate.size() >= 3) {
+    eval::Trajectory gt = eval::ReadTrajectory(*sequence.ground_truth_path);
+    if (!gt.has_timestamps()) {
+      // KITTI poses carry no stamps: pose k belongs to frame k.
+      gt.poses.resize(std::min(gt.poses.size(), sequence.size()));
+      if (!gt.raw_rotations.empty()) gt.raw_rotations.resize(gt.poses.size());
+      for (size_t k = 0; k < gt.poses.size(); ++k) {
+        gt.timestamps.push_back(sequence.frames[k].timestamp);
+      }
+    }
+    const eval::AteResult ate =
+        eval::ComputeAte(gt, run.estimate, eval::AteOptions::Defaults(eval::Convention::kTum));
+    run.ate_rmse = ate.translation.stats.rmse;
+  }
+  return run;
+}
+
+}  // namespace moslam::slam

@@ -1,0 +1,244 @@
+// slam::System (system.h): wires the extractors, the tracker and local mapping. Threads: Track()
+// runs in the caller's thread; local mapping runs in one thread fed by a bounded keyframe queue
+// (util/bounded_queue.h), or synchronously after each keyframe in deterministic mode. Shared
+// state between them is the map (guarded by Map::mutex(), see map/map.h), the queue, an atomic
+// "mapping busy" flag, and LocalMapper's timing list (its own mutex).
+#include "moslam/slam/system.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <thread>
+#include <utility>
+
+#include <opencv2/imgproc.hpp>
+
+#include "moslam/camera/stereo_camera.h"
+#include "moslam/eval/statistics.h"
+#include "moslam/feature/frame.h"
+#include "moslam/feature/orb_extractor.h"
+#include "moslam/map/map.h"
+#include "moslam/slam/local_mapper.h"
+#include "moslam/slam/tracker.h"
+#include "moslam/util/bounded_queue.h"
+#include "moslam/util/error.h"
+
+namespace moslam::slam {
+
+const char* ToString(TrackingState state) {
+  switch (state) {
+    case TrackingState::kNotInitialized:
+      return "not_initialized";
+    case TrackingState::kOk:
+      return "ok";
+    case TrackingState::kLost:
+      return "lost";
+  }
+  return "unknown";
+}
+
+void SystemOptions::Check() const {
+  if (sensor != io::SensorType::kStereo && sensor != io::SensorType::kRgbD) {
+    throw InputError("SystemOptions.sensor: only stereo and rgbd are supported (got " +
+                     std::string(io::ToString(sensor)) + ")");
+  }
+  if (keyframe_queue_capacity < 1) {
+    throw InputError("SystemOptions.keyframe_queue_capacity must be >= 1");
+  }
+  settings.Check(sensor);
+}
+
+namespace {
+
+feature::OrbExtractorOptions ExtractorOptions(const io::OrbSlamSettings& settings) {
+  feature::OrbExtractorOptions options;
+  options.ApplySettings(settings.orb);
+  return options;
+}
+
+cv::Mat ToGrey(const cv::Mat& image, bool rgb) {
+  if (image.channels() == 1) return image;
+  cv::Mat grey;
+  if (image.channels() == 3) {
+    cv::cvtColor(image, grey, rgb ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
+  } else {
+    cv::cvtColor(image, grey, rgb ? cv::COLOR_RGBA2GRAY : cv::COLOR_BGRA2GRAY);
+  }
+  return grey;
+}
+
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+class System::Impl : public KeyFrameSink {
+ public:
+  explicit Impl(const SystemOptions& options)
+      : options_((options.Check(), options)),
+        camera_(options.settings.camera),
+        stereo_camera_(options.settings.camera, options.settings.bf),
+        left_extractor_(ExtractorOptions(options.settings)),
+        right_extractor_(ExtractorOptions(options.settings)),
+        queue_(static_cast<size_t>(options.keyframe_queue_capacity)),
+        mapper_(&map_, camera_, options.settings.bf, MapperOptions(options)),
+        tracker_(&map_, camera_, options.settings.bf, TrackerOpts(options), this) {
+    if (!options_.deterministic) mapping_thread_ = std::thread([this] { MappingLoop(); });
+  }
+  ~Impl() override { Finish(); }
+
+  static LocalMapperOptions MapperOptions(const SystemOptions& o) {
+    LocalMapperOptions m;
+    m.close_depth = o.settings.CloseDepthMetres();
+    return m;
+  }
+  static TrackerOptions TrackerOpts(const SystemOptions& o) {
+    TrackerOptions t;
+    t.close_depth = o.settings.CloseDepthMetres();
+    t.max_frames_between_keyframes = std::max(1, static_cast<int>(o.settings.fps));
+    return t;
+  }
+
+  bool MappingIdle() const override {
+    return options_.deterministic || (!mapping_busy_.load() && queue_.size() == 0);
+  }
+  size_t QueuedKeyFrames() const override { return queue_.size(); }
+  void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) override {
+    if (options_.deterministic) {
+      mapper_.ProcessKeyFrame(keyframe);
+    } else {
+      queue_.Push(keyframe);
+    }
+  }
+
+  FrameReport Track(const FrameInput& input) {
+    FrameReport report;
+    const auto t0 = std::chrono::steady_clock::now();
+    feature::Frame frame = MakeFrame(input);
+    report.num_features = static_cast<int>(frame.size());
+    report.times.extract_ms = MsSince(t0);
+    const TrackOutcome outcome = tracker_.Track(std::move(frame));
+    report.reason = outcome.reason;
+    report.num_matches = outcome.num_matches;
+    report.num_inliers = outcome.num_inliers;
+    report.new_keyframe = outcome.new_keyframe;
+    report.times.track_ms = outcome.track_ms;
+    report.times.local_map_ms = outcome.local_map_ms;
+    report.times.keyframe_ms = outcome.keyframe_ms;
+    switch (outcome.status) {
+      case TrackStatus::kNotInitialized:
+        report.state = TrackingState::kNotInitialized;
+        break;
+      case TrackStatus::kLost:
+        report.state = TrackingState::kLost;
+        ++lost_frames_;
+        break;
+      case TrackStatus::kInitialized:
+      case TrackStatus::kOk:
+        report.state = TrackingState::kOk;
+        report.T_world_cam = outcome.T_cam_world.Inverse();
+        break;
+    }
+    report.times.total_ms = MsSince(t0);
+    return report;
+  }
+
+  void Finish() {
+    queue_.Close();
+    if (mapping_thread_.joinable()) mapping_thread_.join();
+  }
+
+  eval::Trajectory CameraTrajectory() const {
+    eval::Trajectory trajectory;
+    trajectory.name = "moslam camera trajectory";
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    for (const auto& fp : tracker_.frame_poses()) {
+      if (!fp.reference) continue;
+      // Follow erased keyframes up the spanning tree (ORB-SLAM2's SaveTrajectoryTUM).
+      geometry::SE3 T_cam_ref = fp.T_cam_ref;
+      std::shared_ptr<map::KeyFrame> ref = fp.reference;
+      while (ref->bad() && ref->parent()) {
+        T_cam_ref = T_cam_ref * ref->T_cam_parent();
+        ref = ref->parent();
+      }
+      trajectory.timestamps.push_back(fp.timestamp);
+      trajectory.poses.push_back((T_cam_ref * ref->T_cam_world()).Inverse());
+    }
+    return trajectory;
+  }
+
+  eval::Trajectory KeyFrameTrajectory() const {
+    eval::Trajectory trajectory;
+    trajectory.name = "moslam keyframe trajectory";
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    for (const auto& [id, kf] : map_.keyframes()) {
+      if (kf->bad()) continue;
+      trajectory.timestamps.push_back(kf->frame.timestamp);
+      trajectory.poses.push_back(kf->T_world_cam());
+    }
+    return trajectory;
+  }
+
+  MapSummary Summary() const {
+    MapSummary summary;
+    {
+      std::lock_guard<std::mutex> lock(map_.mutex());
+      summary.keyframes = static_cast<int>(map_.keyframes().size());
+      summary.map_points = static_cast<int>(map_.points().size());
+    }
+    summary.lost_frames = lost_frames_;
+    const std::vector<double> steps = mapper_.StepTimes();
+    summary.mapping_steps = static_cast<int>(steps.size());
+    for (double ms : steps) summary.mapping_ms_total += ms;
+    summary.mapping_ms_median = eval::Median(steps);
+    return summary;
+  }
+
+ private:
+  feature::Frame MakeFrame(const FrameInput& input) {
+    const cv::Mat grey = ToGrey(input.image, options_.settings.rgb);
+    if (options_.sensor == io::SensorType::kStereo) {
+      if (input.right.empty())
+        throw InputError("FrameInput.right: stereo frame without right image");
+      return feature::MakeStereoFrame(input.timestamp, grey,
+                                      ToGrey(input.right, options_.settings.rgb), input.mask,
+                                      &left_extractor_, &right_extractor_, stereo_camera_);
+    }
+    if (input.depth.empty()) throw InputError("FrameInput.depth: RGB-D frame without depth");
+    return feature::MakeRgbdFrame(input.timestamp, grey, input.depth, input.mask, &left_extractor_,
+                                  camera_, options_.settings.bf);
+  }
+
+  void MappingLoop() {
+    while (auto keyframe = queue_.Pop()) {
+      mapping_busy_ = true;
+      mapper_.ProcessKeyFrame(*keyframe, [this] { return queue_.size() > 0; });
+      mapping_busy_ = false;
+    }
+  }
+
+  const SystemOptions options_;
+  camera::PinholeCamera camera_;
+  camera::StereoCamera stereo_camera_;
+  feature::OrbExtractor left_extractor_;
+  feature::OrbExtractor right_extractor_;
+  map::Map map_;
+  BoundedQueue<std::shared_ptr<map::KeyFrame>> queue_;
+  LocalMapper mapper_;
+  Tracker tracker_;
+  std::atomic<bool> mapping_busy_{false};
+  std::thread mapping_thread_;
+  int lost_frames_ = 0;
+};
+
+System::System(const SystemOptions& options) : impl_(std::make_unique<Impl>(options)) {}
+System::~System() = default;
+FrameReport System::Track(const FrameInput& input) { return impl_->Track(input); }
+void System::Finish() { impl_->Finish(); }
+eval::Trajectory System::CameraTrajectory() const { return impl_->CameraTrajectory(); }
+eval::Trajectory System::KeyFrameTrajectory() const { return impl_->KeyFrameTrajectory(); }
+MapSummary System::Summary() const { return impl_->Summary(); }
+
+}  // namespace moslam::slam

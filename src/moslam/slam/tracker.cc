@@ -1,0 +1,484 @@
+#include "moslam/slam/tracker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <set>
+#include <utility>
+
+#include "moslam/feature/matcher.h"
+#include "moslam/slam/frame_pose.h"
+#include "moslam/util/check.h"
+
+namespace moslam::slam {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double MsSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// ORB-SLAM2's thresholds: projection radius (pixels at level 0) of the motion model for stereo /
+// RGB-D (th = 7, doubled when too few matches), and of the local-map search (th = 1 times
+// RadiusByViewingCos, 2.5 to 4).
+constexpr float kMotionModelRadius = 7.0f;
+constexpr float kLocalMapRadius = 3.0f;
+constexpr int kMinMotionModelMatches = 20;
+constexpr int kMinTrackingMatches = 10;
+constexpr int kMinReferenceMatches = 15;
+constexpr int kMaxLocalKeyFrames = 80;
+
+}  // namespace
+
+Tracker::Tracker(map::Map* map, const camera::PinholeCamera& camera, double bf,
+                 const TrackerOptions& options, KeyFrameSink* sink)
+    : map_(map), camera_(camera), options_(options), sink_(sink) {
+  MOSLAM_CHECK(map_ != nullptr && sink_ != nullptr);
+  model_.fx = camera.fx();
+  model_.fy = camera.fy();
+  model_.cx = camera.cx();
+  model_.cy = camera.cy();
+  model_.bf = bf;
+}
+
+TrackOutcome Tracker::Track(feature::Frame frame) {
+  TrackOutcome out;
+  const size_t n = frame.size();
+  current_.frame = std::move(frame);
+  current_.points.assign(n, nullptr);
+  current_.outlier.assign(n, false);
+  ++frames_since_keyframe_;
+
+  if (!initialized_) {
+    const auto t0 = Clock::now();
+    {
+      std::lock_guard<std::mutex> lock(map_->mutex());
+      if (!Initialize()) {
+        out.reason = "too few depth points to initialize";
+        RecordPose(false);
+        return out;
+      }
+    }
+    sink_->InsertKeyFrame(reference_);
+    out.keyframe_ms = MsSince(t0);
+    out.status = TrackStatus::kInitialized;
+    out.new_keyframe = true;
+    out.num_inliers = reference_->TrackedMapPoints(1);
+    out.T_cam_world = current_.T_cam_world;
+    RecordPose(true);
+    last_ = std::move(current_);
+    last_ok_ = true;
+    return out;
+  }
+
+  auto t0 = Clock::now();
+  bool ok = false;
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    RefreshLastFrame();
+    if (have_velocity_ && last_ok_) {
+      out.num_matches = TrackWithMotionModel();
+      ok = out.num_matches >= kMinTrackingMatches;
+    }
+    if (!ok) {
+      out.num_matches = TrackReferenceKeyFrame();
+      ok = out.num_matches >= kMinTrackingMatches;
+      if (!ok) out.reason = "too few matches with the motion model and the reference keyframe";
+    }
+  }
+  out.track_ms = MsSince(t0);
+  if (ok) {
+    t0 = Clock::now();
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    out.num_inliers = TrackLocalMap();
+    last_inliers_ = out.num_inliers;
+    ok = out.num_inliers >= options_.min_inliers;
+    if (!ok) out.reason = "too few inliers after local-map tracking";
+    out.local_map_ms = MsSince(t0);
+  }
+  if (!ok) {
+    out.status = TrackStatus::kLost;
+    RecordPose(false);
+    last_ok_ = false;
+    have_velocity_ = false;
+    return out;
+  }
+  velocity_ = current_.T_cam_world * last_.T_cam_world.Inverse();
+  have_velocity_ = true;
+
+  t0 = Clock::now();
+  std::shared_ptr<map::KeyFrame> keyframe;
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    if (NeedNewKeyFrame()) keyframe = CreateKeyFrame();
+  }
+  if (keyframe) sink_->InsertKeyFrame(keyframe);
+  out.keyframe_ms = MsSince(t0);
+  out.new_keyframe = keyframe != nullptr;
+  out.status = TrackStatus::kOk;
+  out.T_cam_world = current_.T_cam_world;
+  RecordPose(true);
+  // ORB-SLAM2 drops the outliers before the frame becomes the last frame.
+  for (size_t i = 0; i < current_.points.size(); ++i) {
+    if (current_.outlier[i]) current_.points[i] = nullptr;
+  }
+  last_ = std::move(current_);
+  last_ok_ = true;
+  return out;
+}
+
+bool Tracker::Initialize() {
+  if (current_.frame.NumWithDepth() < options_.min_init_points) return false;
+  current_.T_cam_world = geometry::SE3::Identity();
+  auto kf = map_->CreateKeyFrame(current_.frame, current_.T_cam_world);
+  const geometry::SE3 T_world_cam = kf->T_world_cam();
+  for (size_t i = 0; i < current_.frame.size(); ++i) {
+    const auto p_cam = current_.frame.UnprojectCamera(i, camera_);
+    if (!p_cam) continue;
+    auto point = map_->CreateMapPoint(T_world_cam * *p_cam, kf);
+    point->AddObservation(kf, i);
+    kf->points[i] = point;
+    point->ComputeDistinctiveDescriptor();
+    point->UpdateNormalAndDepth();
+    current_.points[i] = point;
+  }
+  reference_ = kf;
+  last_keyframe_ = kf;
+  frames_since_keyframe_ = 0;
+  local_keyframes_ = {kf};
+  UpdateLocalPoints();
+  initialized_ = true;
+  return true;
+}
+
+void Tracker::RefreshLastFrame() {
+  // Points fused or culled by local mapping since the last frame (ORB-SLAM2's
+  // CheckReplacedInLastFrame), and the last pose re-read from its reference keyframe, which
+  // local bundle adjustment may have moved (ORB-SLAM2's UpdateLastFrame).
+  for (auto& p : last_.points) {
+    if (!p || !p->bad) continue;
+    auto replacement = p->replaced_by.lock();
+    p = (replacement && !replacement->bad) ? replacement : nullptr;
+  }
+  if (!frame_poses_.empty()) {
+    const FramePose& fp = frame_poses_.back();
+    if (fp.reference && !fp.reference->bad()) {
+      last_.T_cam_world = fp.T_cam_ref * fp.reference->T_cam_world();
+    }
+  }
+}
+
+int Tracker::SearchByProjection(const std::vector<std::shared_ptr<map::MapPoint>>& candidates,
+                                float radius, bool check_right) {
+  const feature::Frame& f = current_.frame;
+  const float log_scale = f.num_levels() > 1 ? std::log(f.scale_factors[1]) : 1.0f;
+  const geometry::SE3& T = current_.T_cam_world;
+  const Eigen::Vector3d center = T.Inverse().translation();
+  std::vector<feature::ProjectedPoint> projected;
+  std::vector<size_t> which;
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const auto& p = candidates[k];
+    if (!p || p->bad || p->descriptor.empty()) continue;
+    const Eigen::Vector3d pc = T * p->position;
+    if (pc.z() <= 0.0) continue;
+    const double inv_z = 1.0 / pc.z();
+    const float u = static_cast<float>(model_.fx * pc.x() * inv_z + model_.cx);
+    const float v = static_cast<float>(model_.fy * pc.y() * inv_z + model_.cy);
+    if (u < f.bounds.min_x || u > f.bounds.max_x || v < f.bounds.min_y || v > f.bounds.max_y) {
+      continue;
+    }
+    const float dist = static_cast<float>((p->position - center).norm());
+    feature::ProjectedPoint pp;
+    pp.pixel = Eigen::Vector2f(u, v);
+    pp.octave = p->PredictScale(dist, log_scale, f.num_levels());
+    pp.descriptor = p->descriptor.ptr<uint8_t>();
+    pp.u_right = check_right && model_.bf > 0.0 ? static_cast<float>(u - model_.bf * inv_z) : -1.0f;
+    projected.push_back(pp);
+    which.push_back(k);
+  }
+  feature::ProjectionMatchOptions options;
+  options.radius = radius;
+  const std::vector<int> matches = feature::MatchByProjection(f, projected, options);
+  int n = 0;
+  for (size_t j = 0; j < matches.size(); ++j) {
+    const int idx = matches[j];
+    if (idx < 0 || current_.points[idx]) continue;
+    current_.points[idx] = candidates[which[j]];
+    current_.outlier[idx] = false;
+    ++n;
+  }
+  return n;
+}
+
+int Tracker::TrackWithMotionModel() {
+  current_.T_cam_world = velocity_ * last_.T_cam_world;
+  std::vector<std::shared_ptr<map::MapPoint>> candidates;
+  for (const auto& p : last_.points) {
+    if (p && !p->bad) candidates.push_back(p);
+  }
+  int n = SearchByProjection(candidates, kMotionModelRadius, true);
+  if (n < kMinMotionModelMatches) {
+    std::fill(current_.points.begin(), current_.points.end(), nullptr);
+    n = SearchByProjection(candidates, 2.0f * kMotionModelRadius, true);
+  }
+  if (n < kMinMotionModelMatches) return n;
+  OptimizeCurrentPose();
+  return DiscardOutliers();
+}
+
+int Tracker::TrackReferenceKeyFrame() {
+  std::fill(current_.points.begin(), current_.points.end(), nullptr);
+  std::fill(current_.outlier.begin(), current_.outlier.end(), false);
+  const auto& ref = reference_;
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  std::vector<size_t> index;
+  for (size_t i = 0; i < ref->points.size(); ++i) {
+    const auto& p = ref->points[i];
+    if (!p || p->bad) continue;
+    keypoints.push_back(ref->frame.keypoints_undistorted[i]);
+    descriptors.push_back(ref->frame.descriptors.row(static_cast<int>(i)));
+    index.push_back(i);
+  }
+  if (keypoints.empty()) return 0;
+  feature::DescriptorMatchOptions options;
+  options.ratio = 0.7f;  // ORB-SLAM2's SearchByBoW in TrackReferenceKeyFrame
+  const auto matches =
+      feature::MatchByDescriptor(keypoints, descriptors, current_.frame.keypoints_undistorted,
+                                 current_.frame.descriptors, options);
+  if (static_cast<int>(matches.size()) < kMinReferenceMatches) {
+    return static_cast<int>(matches.size());
+  }
+  for (const auto& m : matches) current_.points[m.index2] = ref->points[index[m.index1]];
+  current_.T_cam_world = last_.T_cam_world;
+  OptimizeCurrentPose();
+  return DiscardOutliers();
+}
+
+int Tracker::OptimizeCurrentPose() {
+  std::vector<size_t> index;
+  std::vector<Eigen::Vector3d> points;
+  for (size_t i = 0; i < current_.points.size(); ++i) {
+    if (!current_.points[i]) continue;
+    index.push_back(i);
+    points.push_back(current_.points[i]->position);
+  }
+  const optim::PoseOptimizerResult result = OptimizeFramePose(
+      model_, current_.frame, index, points, current_.T_cam_world, options_.num_threads);
+  if (result.num_inliers < 3) return 0;
+  current_.T_cam_world = result.T_cam_world;
+  for (size_t k = 0; k < index.size(); ++k) current_.outlier[index[k]] = !result.inlier[k];
+  return result.num_inliers;
+}
+
+int Tracker::DiscardOutliers() {
+  int n = 0;
+  for (size_t i = 0; i < current_.points.size(); ++i) {
+    if (!current_.points[i]) continue;
+    if (current_.outlier[i]) {
+      current_.points[i] = nullptr;
+      current_.outlier[i] = false;
+    } else if (current_.points[i]->num_observations() > 0) {
+      ++n;
+    }
+  }
+  return n;
+}
+
+int Tracker::TrackLocalMap() {
+  UpdateLocalKeyFrames();
+  UpdateLocalPoints();
+  SearchLocalPoints();
+  OptimizeCurrentPose();
+  int inliers = 0;
+  for (size_t i = 0; i < current_.points.size(); ++i) {
+    auto& p = current_.points[i];
+    if (!p) continue;
+    if (!current_.outlier[i]) {
+      ++p->found;
+      if (p->num_observations() > 0) ++inliers;
+    } else {
+      // Stereo / RGB-D: outliers are dropped at once (ORB-SLAM2's TrackLocalMap).
+      p = nullptr;
+      current_.outlier[i] = false;
+    }
+  }
+  return inliers;
+}
+
+void Tracker::UpdateLocalKeyFrames() {
+  // Keyframes that see the frame's points, with the number seen (ORB-SLAM2).
+  std::map<uint64_t, int> counter;
+  std::map<uint64_t, std::shared_ptr<map::KeyFrame>> by_id;
+  for (auto& p : current_.points) {
+    if (!p) continue;
+    if (p->bad) {
+      p = nullptr;
+      continue;
+    }
+    for (const auto& [kf_id, obs] : p->observations()) {
+      auto kf = obs.keyframe.lock();
+      if (!kf || kf->bad()) continue;
+      ++counter[kf_id];
+      by_id[kf_id] = kf;
+    }
+  }
+  if (counter.empty()) return;
+  local_keyframes_.clear();
+  std::set<uint64_t> added;
+  int best = 0;
+  for (const auto& [kf_id, count] : counter) {
+    local_keyframes_.push_back(by_id[kf_id]);
+    added.insert(kf_id);
+    if (count > best) {
+      best = count;
+      reference_ = by_id[kf_id];
+    }
+  }
+  // Neighbours: one best covisible, one child and the parent of each (ORB-SLAM2).
+  const size_t first_ring = local_keyframes_.size();
+  for (size_t k = 0; k < first_ring; ++k) {
+    if (static_cast<int>(local_keyframes_.size()) >= kMaxLocalKeyFrames) break;
+    const auto kf = local_keyframes_[k];
+    for (const auto& n : kf->BestCovisibles(10)) {
+      if (added.insert(n->id).second) {
+        local_keyframes_.push_back(n);
+        break;
+      }
+    }
+    for (uint64_t child_id : kf->children()) {
+      auto child = map_->keyframe(child_id);
+      if (child && !child->bad() && added.insert(child_id).second) {
+        local_keyframes_.push_back(child);
+        break;
+      }
+    }
+    auto parent = kf->parent();
+    if (parent && !parent->bad() && added.insert(parent->id).second) {
+      local_keyframes_.push_back(parent);
+    }
+  }
+}
+
+void Tracker::UpdateLocalPoints() {
+  local_points_.clear();
+  std::set<uint64_t> added;
+  for (const auto& kf : local_keyframes_) {
+    for (const auto& p : kf->points) {
+      if (p && !p->bad && added.insert(p->id).second) local_points_.push_back(p);
+    }
+  }
+}
+
+void Tracker::SearchLocalPoints() {
+  std::set<uint64_t> in_frame;
+  for (auto& p : current_.points) {
+    if (!p) continue;
+    if (p->bad) {
+      p = nullptr;
+      continue;
+    }
+    ++p->visible;
+    in_frame.insert(p->id);
+  }
+  // Frustum test of ORB-SLAM2's isInFrustum: in front, inside the scale-invariance range and
+  // seen at less than 60 degrees from the mean viewing direction.
+  const Eigen::Vector3d center = current_.T_cam_world.Inverse().translation();
+  std::vector<std::shared_ptr<map::MapPoint>> candidates;
+  for (const auto& p : local_points_) {
+    if (p->bad || in_frame.count(p->id)) continue;
+    const Eigen::Vector3d pc = current_.T_cam_world * p->position;
+    if (pc.z() <= 0.0) continue;
+    const double u = model_.fx * pc.x() / pc.z() + model_.cx;
+    const double v = model_.fy * pc.y() / pc.z() + model_.cy;
+    const auto& b = current_.frame.bounds;
+    if (u < b.min_x || u > b.max_x || v < b.min_y || v > b.max_y) continue;
+    const Eigen::Vector3d ray = p->position - center;
+    const double dist = ray.norm();
+    if (dist < 0.8 * p->min_distance || dist > 1.2 * p->max_distance) continue;
+    if (ray.dot(p->normal) < 0.5 * dist) continue;
+    ++p->visible;
+    candidates.push_back(p);
+  }
+  // ORB-SLAM2 checks the right coordinate only in the motion-model search.
+  SearchByProjection(candidates, kLocalMapRadius, false);
+}
+
+bool Tracker::NeedNewKeyFrame() const {
+  // ORB-SLAM2's Tracking::NeedNewKeyFrame for stereo / RGB-D.
+  const size_t num_keyframes = map_->keyframes().size();
+  const int min_obs = num_keyframes <= 2 ? 2 : 3;
+  const int ref_matches = reference_->TrackedMapPoints(min_obs);
+  const bool idle = sink_->MappingIdle();
+  int tracked_close = 0, untracked_close = 0;
+  const feature::Frame& f = current_.frame;
+  for (size_t i = 0; i < f.size(); ++i) {
+    if (f.depth[i] <= 0.0f || f.depth[i] >= options_.close_depth) continue;
+    if (current_.points[i] && !current_.outlier[i]) {
+      ++tracked_close;
+    } else {
+      ++untracked_close;
+    }
+  }
+  const bool need_close = tracked_close < 100 && untracked_close > 70;
+  const double th_ref = num_keyframes < 2 ? 0.4 : 0.75;
+  const bool c1a =
+      frames_since_keyframe_ >= static_cast<uint64_t>(options_.max_frames_between_keyframes);
+  const bool c1c = last_inliers_ < ref_matches * 0.25 || need_close;
+  const bool c2 = (last_inliers_ < ref_matches * th_ref || need_close) && last_inliers_ > 15;
+  if (!((c1a || idle || c1c) && c2)) return false;
+  return idle || sink_->QueuedKeyFrames() < 3;
+}
+
+std::shared_ptr<map::KeyFrame> Tracker::CreateKeyFrame() {
+  auto kf = map_->CreateKeyFrame(current_.frame, current_.T_cam_world);
+  for (size_t i = 0; i < current_.points.size(); ++i) {
+    if (current_.points[i] && !current_.outlier[i]) kf->points[i] = current_.points[i];
+  }
+  // New points from the closest depth measurements: all closer than close_depth, and at least
+  // the 100 closest (ORB-SLAM2's CreateNewKeyFrame).
+  std::vector<std::pair<float, size_t>> by_depth;
+  const feature::Frame& f = current_.frame;
+  for (size_t i = 0; i < f.size(); ++i) {
+    if (f.depth[i] > 0.0f) by_depth.emplace_back(f.depth[i], i);
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  const geometry::SE3 T_world_cam = kf->T_world_cam();
+  int n = 0;
+  for (const auto& [depth, i] : by_depth) {
+    const auto& existing = current_.points[i];
+    if (!existing || existing->num_observations() < 1) {
+      const auto p_cam = f.UnprojectCamera(i, camera_);
+      if (p_cam) {
+        auto point = map_->CreateMapPoint(T_world_cam * *p_cam, kf);
+        point->AddObservation(kf, i);
+        kf->points[i] = point;
+        point->ComputeDistinctiveDescriptor();
+        point->UpdateNormalAndDepth();
+        current_.points[i] = point;
+        current_.outlier[i] = false;
+      }
+    }
+    ++n;
+    if (depth > options_.close_depth && n > 100) break;
+  }
+  reference_ = kf;
+  last_keyframe_ = kf;
+  frames_since_keyframe_ = 0;
+  return kf;
+}
+
+void Tracker::RecordPose(bool ok) {
+  FramePose fp;
+  fp.timestamp = current_.frame.timestamp;
+  if (ok) {
+    fp.reference = reference_;
+    fp.T_cam_ref = current_.T_cam_world * reference_->T_world_cam();
+  }
+  frame_poses_.push_back(fp);
+}
+
+}  // namespace moslam::slam

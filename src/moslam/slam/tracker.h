@@ -1,0 +1,121 @@
+// Tracking (ORB-SLAM2's Tracking, Mur-Artal & Tardós 2017) for stereo and RGB-D frames: map
+// initialization from the first frame with enough depth points; per frame a constant-velocity
+// motion model (projection search of the last frame's points), falling back to descriptor
+// matching against the reference keyframe; then the local map (covisible keyframes and their
+// points, projection search); pose-only optimization with Huber loss and chi-square rejection
+// (optim::OptimizePose); the keyframe decision; and keyframe creation with new close points.
+//
+// Threads: Track() runs in the caller's thread. It holds Map::mutex() for each map-reading step
+// and for keyframe creation (map/map.h states the locking design); the new keyframe is handed to
+// the KeyFrameSink after the lock is released (the sink may block on a full queue).
+// Scratch state (which local points were already matched this frame, ORB-SLAM2's
+// mnTrackReferenceForFrame / mnLastFrameSeen) lives in sets inside this class, not on the map.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "moslam/camera/pinhole_camera.h"
+#include "moslam/feature/frame.h"
+#include "moslam/geometry/se3.h"
+#include "moslam/map/map.h"
+#include "moslam/optim/observation.h"
+
+namespace moslam::slam {
+
+// Where new keyframes go (local mapping), and what tracking may ask of it.
+class KeyFrameSink {
+ public:
+  virtual ~KeyFrameSink() = default;
+  // True when local mapping is idle (ORB-SLAM2's AcceptKeyFrames).
+  virtual bool MappingIdle() const = 0;
+  // Keyframes waiting in the queue.
+  virtual size_t QueuedKeyFrames() const = 0;
+  // Called without the map lock held.
+  virtual void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) = 0;
+};
+
+struct TrackerOptions {
+  double close_depth = 0.0;   // metres (settings.CloseDepthMetres()): close/far threshold
+  int min_init_points = 500;  // depth points needed to initialize (ORB-SLAM2: 500)
+  int max_frames_between_keyframes = 10;  // ORB-SLAM2: fps
+  int min_inliers = 30;                   // local-map inliers for "ok" (ORB-SLAM2: 30)
+  int num_threads = 1;                    // for the pose optimizer
+};
+
+enum class TrackStatus { kNotInitialized, kInitialized, kOk, kLost };
+
+struct TrackOutcome {
+  TrackStatus status = TrackStatus::kNotInitialized;
+  std::string reason;
+  int num_matches = 0;
+  int num_inliers = 0;
+  bool new_keyframe = false;
+  geometry::SE3 T_cam_world;
+  double track_ms = 0.0, local_map_ms = 0.0, keyframe_ms = 0.0;
+};
+
+class Tracker {
+ public:
+  Tracker(map::Map* map, const camera::PinholeCamera& camera, double bf,
+          const TrackerOptions& options, KeyFrameSink* sink);
+
+  TrackOutcome Track(feature::Frame frame);
+
+  // Per processed frame: its reference keyframe and the pose relative to it (ORB-SLAM2's
+  // mlRelativeFramePoses), or no keyframe when the frame was lost / before initialization.
+  struct FramePose {
+    double timestamp = 0.0;
+    std::shared_ptr<map::KeyFrame> reference;
+    geometry::SE3 T_cam_ref;
+  };
+  const std::vector<FramePose>& frame_poses() const { return frame_poses_; }
+
+ private:
+  struct CurrentFrame {
+    feature::Frame frame;
+    geometry::SE3 T_cam_world;
+    std::vector<std::shared_ptr<map::MapPoint>> points;  // per keypoint
+    std::vector<bool> outlier;                           // per keypoint
+  };
+
+  bool Initialize();
+  void RefreshLastFrame();
+  int TrackWithMotionModel();
+  int TrackReferenceKeyFrame();
+  int OptimizeCurrentPose();
+  int DiscardOutliers();
+  int TrackLocalMap();
+  void UpdateLocalKeyFrames();
+  void UpdateLocalPoints();
+  void SearchLocalPoints();
+  bool NeedNewKeyFrame() const;
+  std::shared_ptr<map::KeyFrame> CreateKeyFrame();
+  int SearchByProjection(const std::vector<std::shared_ptr<map::MapPoint>>& candidates,
+                         float radius, bool check_right);
+  void RecordPose(bool ok);
+
+  map::Map* map_;
+  camera::PinholeCamera camera_;
+  optim::CameraModel model_;
+  TrackerOptions options_;
+  KeyFrameSink* sink_;
+
+  bool initialized_ = false;
+  CurrentFrame current_;
+  CurrentFrame last_;
+  bool last_ok_ = false;
+  bool have_velocity_ = false;
+  geometry::SE3 velocity_;  // T_cam_world(k) * T_world_cam(k-1)
+  std::shared_ptr<map::KeyFrame> reference_;
+  std::shared_ptr<map::KeyFrame> last_keyframe_;
+  uint64_t frames_since_keyframe_ = 0;
+  int last_inliers_ = 0;
+  std::vector<std::shared_ptr<map::KeyFrame>> local_keyframes_;
+  std::vector<std::shared_ptr<map::MapPoint>> local_points_;
+  std::vector<FramePose> frame_poses_;
+};
+
+}  // namespace moslam::slam
