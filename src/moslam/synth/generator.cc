@@ -13,9 +13,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "moslam/synth/bounded_queue.h"
 #include "moslam/synth/output_files.h"
 #include "moslam/synth/rng.h"
+#include "moslam/util/bounded_queue.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
 #include "moslam/util/progress.h"
@@ -83,7 +83,7 @@ void Pipeline(int n, const std::function<FrameData(int)>& render,
       while (auto frame = queue.Pop()) write(*frame);
     } catch (...) {
       error = std::current_exception();
-      queue.Stop();
+      queue.Close();
     }
   });
   Progress progress(label, static_cast<size_t>(n), progress_on ? 2.0 : 1e9, "frames");
@@ -95,11 +95,11 @@ void Pipeline(int n, const std::function<FrameData(int)>& render,
       progress.Update(static_cast<size_t>(i + 1));
     }
   } catch (...) {
-    queue.Stop();
+    queue.Close();
     writer.join();
     throw;
   }
-  queue.Stop();
+  queue.Close();
   writer.join();
   if (error) std::rethrow_exception(error);
   if (progress_on) progress.Finish();
