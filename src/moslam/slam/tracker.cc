@@ -165,6 +165,8 @@ void Tracker::RefreshLastFrame() {
     auto replacement = p->replaced_by.lock();
     p = (replacement && !replacement->bad) ? replacement : nullptr;
   }
+  // A reference keyframe culled by local mapping hands over to its spanning-tree parent.
+  while (reference_->bad() && reference_->parent()) reference_ = reference_->parent();
   if (!frame_poses_.empty()) {
     const FramePose& fp = frame_poses_.back();
     if (fp.reference && !fp.reference->bad()) {
