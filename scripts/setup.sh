@@ -8,7 +8,8 @@ PACKAGES=(
   g++ cmake make pkg-config clang-format
   # libraries (README "Dependencies" says why each)
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
-  libceres-dev libosmesa6-dev
+  libceres-dev
+  libosmesa6-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
 )

@@ -10,6 +10,7 @@ void AddEvalCommand(CLI::App& app);
 void AddDatasetCommand(CLI::App& app);
 void AddFeaturesCommand(CLI::App& app);
 void AddCrfCommand(CLI::App& app);
+void AddRunCommand(CLI::App& app);
 void AddSynthCommand(CLI::App& app);
 
 }  // namespace moslam::app

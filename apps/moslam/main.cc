@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   moslam::app::AddDatasetCommand(app);
   moslam::app::AddFeaturesCommand(app);
   moslam::app::AddCrfCommand(app);
+  moslam::app::AddRunCommand(app);
   moslam::app::AddSynthCommand(app);
 
   try {

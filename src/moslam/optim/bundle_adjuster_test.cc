@@ -205,9 +205,10 @@ TEST(AdjustBundle, DeterministicWithOneThread) {
 TEST(AdjustBundle, SparseSchurMatchesDense) {
   std::mt19937 rng(37);
   const test::BundleScene scene = test::MakeBundleScene(rng, 6, 1, 300, 0.7, 0.5, 0.05);
-  BundleAdjusterOptions sparse;
+  BundleAdjusterOptions dense, sparse;
+  dense.dense_schur_max_poses = 40;
   sparse.dense_schur_max_poses = 0;
-  const BundleResult a = AdjustBundle(scene.problem);
+  const BundleResult a = AdjustBundle(scene.problem, dense);
   const BundleResult b = AdjustBundle(scene.problem, sparse);
   EXPECT_EQ(a.edge_inlier, b.edge_inlier);
   EXPECT_NEAR(a.final_cost, b.final_cost, 1e-6 * a.final_cost);

@@ -230,12 +230,12 @@ void BuildOffice(Builder& b, bool walking, bool seated) {
     }
   }
   if (walking) {
-    // Two people walking loops that cross in front of the camera at 1-2 m (covering 20-60 % of
-    // the view there) and go round the desks behind, in opposite directions.
-    const double near = -0.8 + rng.Uniform(-0.2, 0.2);
-    std::vector<Vector2d> a = {
-        {-2.0, near}, {1.9, near + 0.2}, {1.9, desk_y + 1.0}, {-1.9, desk_y + 1.0}};
-    std::vector<Vector2d> c = {{1.7, near + 0.7}, {-1.7, near + 0.5}, {-1.7, -1.4}, {1.7, -1.3}};
+    // Two people walking loops that cross in front of the camera at 0.9-1.5 m (covering 20-60 %
+    // of the view there) and come back 2-3 m away in front of the desks, in opposite directions.
+    // The loops are narrow (2.2-2.6 m) so that the walkers stay in view most of the time.
+    const double near = -1.0 + rng.Uniform(-0.15, 0.15);
+    std::vector<Vector2d> a = {{-1.3, near}, {1.3, near + 0.2}, {1.3, 0.4}, {-1.3, 0.4}};
+    std::vector<Vector2d> c = {{1.1, -0.2}, {-1.1, -0.3}, {-1.1, -1.4}, {1.1, -1.3}};
     b.AddPerson(Person::Walking(b.Look(), a, rng.Uniform(0.8, 1.1), rng.Uniform(0, 5)));
     b.AddPerson(Person::Walking(b.Look(), c, rng.Uniform(0.7, 1.0), rng.Uniform(0, 5)));
   }

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "moslam/io/dataset.h"
 #include "moslam/io/image.h"
@@ -284,6 +285,31 @@ TEST(Synth, TrainingModeWritesLabelsAndEvalOnlyMasks) {
   }
   // Training frames are not the presets' frames.
   EXPECT_FALSE(fs::exists(root / "rgb.txt"));
+}
+
+TEST(Synth, MotionBlurChangesColourOnlyWhereThingsMove) {
+  const TextureSet textures = TextureSet::Procedural(3, 1, 128);
+  const SequenceSpec spec = MakePreset("w_static", 3, textures, 160, 120);
+  Renderer renderer(160, 120, textures);
+  GeneratorOptions sharp = Small("w_static", "unused", 1);
+  sharp.sensor_noise = false;
+  GeneratorOptions blurred = sharp;
+  blurred.motion_blur = true;
+  // A frame with a walker in view.
+  int index = 0;
+  FrameData a;
+  for (; index < 300; index += 10) {
+    a = RenderFrame(spec, renderer, index, sharp);
+    if (cv::countNonZero(a.moving) > 200) break;
+  }
+  ASSERT_GT(cv::countNonZero(a.moving), 200);
+  const FrameData b = RenderFrame(spec, renderer, index, blurred);
+  EXPECT_EQ(cv::countNonZero(a.class_id != b.class_id), 0);  // labels of the frame's own time
+  cv::Mat diff;
+  cv::absdiff(a.rgb, b.rgb, diff);
+  cv::Mat grey_diff;
+  cv::cvtColor(diff, grey_diff, cv::COLOR_RGB2GRAY);
+  EXPECT_GT(cv::countNonZero(grey_diff > 10), 50);  // moving limbs are smeared
 }
 
 TEST(Synth, OptionsAreChecked) {

@@ -1,0 +1,206 @@
+// `moslam run`: runs the SLAM system over a data set and writes trajectories, a per-frame log and
+// a summary (runner/outputs.h). The loop itself is moslam::runner (RunSequence, tested with a fake
+// tracker); this file maps options and adapts slam::System to runner::Tracker.
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+#include "commands.h"
+#include "moslam/io/dataset.h"
+#include "moslam/io/orbslam_settings.h"
+#include "moslam/runner/mask_source.h"
+#include "moslam/runner/outputs.h"
+#include "moslam/runner/run_loop.h"
+#include "moslam/runner/tracker.h"
+#include "moslam/util/error.h"
+#if MOSLAM_HAVE_SLAM
+#include "moslam/slam/system.h"
+#endif
+
+namespace moslam::app {
+namespace {
+
+struct RunArgs {
+  std::vector<std::string> dataset;  // FORMAT PATH
+  std::string settings;
+  std::vector<std::string> mask_source = {"none"};  // none | files DIR | synth-gt
+  std::string mask_missing = "error";
+  std::vector<std::string> movable;
+  int mask_dilate = 0;
+  std::string out;
+  std::string frames;
+  double rate_hz = 0.0;
+  size_t queue = 4;
+  bool realtime = false;
+  bool deterministic = false;
+  bool quiet = false;
+};
+
+#if MOSLAM_HAVE_SLAM
+// slam::System behind the runner's interface.
+class SystemTracker : public runner::Tracker {
+ public:
+  explicit SystemTracker(const slam::SystemOptions& options) : system_(options) {}
+  slam::FrameReport Track(const slam::FrameInput& input) override { return system_.Track(input); }
+  void Finish() override { system_.Finish(); }
+  eval::Trajectory CameraTrajectory() const override { return system_.CameraTrajectory(); }
+  eval::Trajectory KeyFrameTrajectory() const override { return system_.KeyFrameTrajectory(); }
+  slam::MapSummary Summary() const override { return system_.Summary(); }
+
+ private:
+  slam::System system_;
+};
+#endif
+
+std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings,
+                                             io::SensorType sensor, bool deterministic) {
+#if MOSLAM_HAVE_SLAM
+  slam::SystemOptions options;
+  options.sensor = sensor;
+  options.settings = settings;
+  options.deterministic = deterministic;
+  options.Check();
+  return std::make_unique<SystemTracker>(options);
+#else
+  (void)settings;
+  (void)sensor;
+  (void)deterministic;
+  ThrowInput(
+      "this moslam was built without the SLAM core (target moslam::slam); `moslam run` "
+      "needs it");
+#endif
+}
+
+runner::MaskOptions MakeMaskOptions(const RunArgs& args) {
+  runner::MaskOptions options;
+  const auto kind = runner::ParseMaskSourceKind(args.mask_source.at(0));
+  if (!kind) {
+    ThrowInput("--mask-source: unknown source '{}' (none, files DIR, synth-gt)",
+               args.mask_source[0]);
+  }
+  options.kind = *kind;
+  const bool takes_folder = *kind == runner::MaskSourceKind::kFiles;
+  if (args.mask_source.size() == 2 && !takes_folder) {
+    ThrowInput("--mask-source {} takes no folder (got '{}')", args.mask_source[0],
+               args.mask_source[1]);
+  }
+  if (takes_folder && args.mask_source.size() == 2) options.folder = args.mask_source[1];
+  options.missing_empty = args.mask_missing == "empty";
+  options.movable = args.movable;
+  options.dilate_px = args.mask_dilate;
+  return options;
+}
+
+void Run(const RunArgs& args) {
+  const auto format = io::ParseDatasetFormat(args.dataset.at(0));
+  if (!format || *format == io::DatasetFormat::kAuto) {
+    ThrowInput("--dataset: unknown format '{}' (tum, kitti, euroc, folder)", args.dataset[0]);
+  }
+  const std::string& path = args.dataset.at(1);
+  // The settings are read first: an image folder takes its frame rate from Camera.fps.
+  io::DatasetOptions dataset_options;
+  dataset_options.format = *format;
+  io::Sequence sequence;
+  io::OrbSlamSettings settings;
+  if (*format == io::DatasetFormat::kImageFolder) {
+    settings = io::LoadOrbSlamSettings(args.settings, io::SensorType::kMonocular);
+    dataset_options.image_folder_rate_hz = args.rate_hz > 0 ? args.rate_hz : settings.fps;
+    sequence = io::ReadDataset(path, dataset_options);
+  } else {
+    sequence = io::ReadDataset(path, dataset_options);
+    settings = io::LoadOrbSlamSettings(args.settings, sequence.sensor);
+  }
+  if (sequence.empty()) ThrowInFile(path, "data set has no frames");
+
+  const std::unique_ptr<runner::MaskSource> masks =
+      runner::MakeMaskSource(MakeMaskOptions(args), sequence);
+  runner::RunOptions options;
+  if (!args.frames.empty()) options.frames = runner::ParseFrameRange(args.frames);
+  options.realtime = args.realtime;
+  options.progress = !args.quiet;
+  options.queue_capacity = args.queue;
+  // RGB-D colour images go to the tracker in colour, converted to grey by Camera.RGB as ORB-SLAM2
+  // does; the grey KITTI and EuRoC images are loaded grey.
+  options.colour =
+      sequence.sensor == io::SensorType::kRgbD ? io::ColourMode::kColour : io::ColourMode::kGrey;
+  options.depth_factor = settings.depth_map_factor;
+
+  runner::RunDescription description;
+  description.dataset_path = sequence.root;
+  description.format = *format;
+  description.sensor = sequence.sensor;
+  description.settings_path = args.settings;
+  description.settings = settings;
+  description.mask_source = masks->Describe();
+  description.deterministic = args.deterministic;
+  description.realtime = args.realtime;
+  spdlog::info("{}: {} frames ({}), masks: {}", sequence.root, sequence.size(),
+               io::ToString(sequence.sensor), description.mask_source);
+
+  const std::unique_ptr<runner::Tracker> tracker =
+      MakeTracker(settings, sequence.sensor, args.deterministic);
+  const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
+  const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
+  const std::string summary = runner::WriteRunOutputs(sequence, result, description, out);
+  std::cout << summary << std::flush;
+}
+
+}  // namespace
+
+void AddRunCommand(CLI::App& app) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* command = app.add_subcommand(
+      "run",
+      "Run SLAM over a data set: trajectories (TUM; KITTI too for KITTI input), per-frame log, "
+      "summary with timings, and the ATE when the data set has ground truth (docs/RUNNING.md)");
+  command
+      ->add_option("--dataset", args->dataset,
+                   "FORMAT PATH: tum, kitti, euroc or folder, and "
+                   "the data-set folder")
+      ->expected(2)
+      ->required();
+  command->add_option("--settings", args->settings, "ORB-SLAM2 settings YAML (configs/*.yaml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--mask-source", args->mask_source,
+                   "Movable-object masks: none, files DIR (DIR/<image stem>.png), synth-gt (the "
+                   "synthetic generator's class/<stem>.png with classes.txt)")
+      ->expected(1, 2)
+      ->default_str("none");
+  command
+      ->add_option("--mask-missing", args->mask_missing,
+                   "files: a frame without a mask file is an error, or runs with an empty mask")
+      ->check(CLI::IsMember({"error", "empty"}))
+      ->capture_default_str();
+  command
+      ->add_option("--movable", args->movable,
+                   "synth-gt: movable class names, comma-separated (default: those classes.txt "
+                   "marks movable)")
+      ->delimiter(',');
+  command->add_option("--mask-dilate", args->mask_dilate, "Grow every mask by this many pixels")
+      ->capture_default_str();
+  command->add_option("--out", args->out, "Output folder")->default_str("run_<sequence name>");
+  command->add_option("--frames", args->frames,
+                      "Sub-range A:B of frame indices (B excluded; A: and :B too)");
+  command->add_option(
+      "--rate", args->rate_hz,
+      "folder: frames per second of the images (default: the settings' Camera.fps)");
+  command->add_option("--queue", args->queue, "Frames loaded ahead of tracking")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  command->add_flag("--realtime", args->realtime,
+                    "Pace frames by their timestamps instead of running as fast as possible");
+  command->add_flag("--deterministic", args->deterministic,
+                    "Fixed seeds, local mapping synchronous in the tracking thread");
+  command->add_flag("--quiet", args->quiet, "No progress line and only warnings in the log");
+  command->callback([args] {
+    if (args->quiet) spdlog::set_level(std::max(spdlog::get_level(), spdlog::level::warn));
+    Run(*args);
+  });
+}
+
+}  // namespace moslam::app

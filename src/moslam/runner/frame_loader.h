@@ -1,0 +1,58 @@
+// Image loading in its own thread, ahead of tracking: a producer reads frames (images, depth, the
+// movable-object mask) into a BoundedQueue that the run loop pops from, so disk and PNG decoding
+// overlap with tracking while the bound keeps memory flat.
+//
+// Stop rules: at the end of the range the loader closes the queue and Next() returns nullopt once
+// the queue is drained. When loading throws (a missing image, a missing mask), the loader keeps
+// the exception, closes the queue, and Next() rethrows it in the consumer's thread after the
+// frames loaded before it. Destroying the FrameLoader early (the consumer threw) closes the queue,
+// which wakes a loader blocked on a full queue, and joins it: no deadlock, no leaked thread.
+#pragma once
+
+#include <cstddef>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "moslam/io/sequence.h"
+#include "moslam/slam/system.h"
+#include "moslam/util/bounded_queue.h"
+
+namespace moslam::runner {
+
+struct LoadedFrame {
+  int index = 0;  // FrameEntry::index
+  slam::FrameInput input;
+  double load_ms = 0.0;        // reading and decoding the images
+  double mask_ms = 0.0;        // reading (and dilating) the mask
+  double mask_fraction = 0.0;  // share of movable pixels, 0 when there is no mask
+};
+
+// Loads one frame; throws InputError naming the file on failure. Called in the loader thread.
+using LoadFunction = std::function<LoadedFrame(const io::FrameEntry&)>;
+
+class FrameLoader {
+ public:
+  // Starts the thread at once; loads sequence.frames[first, last) in order.
+  FrameLoader(const io::Sequence& sequence, size_t first, size_t last, LoadFunction load,
+              size_t queue_capacity);
+  ~FrameLoader();
+  FrameLoader(const FrameLoader&) = delete;
+  FrameLoader& operator=(const FrameLoader&) = delete;
+
+  // The next frame; nullopt at the end. Rethrows the loader's exception once it is reached.
+  std::optional<LoadedFrame> Next();
+
+ private:
+  void Run(const io::Sequence& sequence, size_t first, size_t last);
+
+  LoadFunction load_;
+  BoundedQueue<LoadedFrame> queue_;
+  std::mutex error_mutex_;
+  std::exception_ptr error_;
+  std::thread thread_;  // last member: started after everything it uses exists
+};
+
+}  // namespace moslam::runner

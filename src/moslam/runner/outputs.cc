@@ -1,0 +1,272 @@
+#include "moslam/runner/outputs.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "moslam/eval/evaluate.h"
+#include "moslam/eval/plot.h"
+#include "moslam/eval/report.h"
+#include "moslam/eval/statistics.h"
+#include "moslam/util/check.h"
+#include "moslam/util/error.h"
+
+namespace moslam::runner {
+namespace fs = std::filesystem;
+namespace {
+
+std::ofstream OpenForWriting(const std::string& path) {
+  std::ofstream out(path);
+  if (!out) ThrowInFile(path, "cannot be written");
+  return out;
+}
+
+void CheckWritten(const std::ofstream& out, const std::string& path) {
+  if (!out) ThrowInFile(path, "could not be written completely");
+}
+
+// A CSV field, quoted when it holds a separator or a quote (RFC 4180).
+std::string CsvField(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) {
+    if (c == '"') quoted += '"';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+// The per-frame value of one stage over all frames.
+template <typename Get>
+std::vector<double> Column(const RunResult& result, Get get) {
+  std::vector<double> values;
+  values.reserve(result.frames.size());
+  for (const FrameRecord& f : result.frames) values.push_back(get(f));
+  return values;
+}
+
+struct StageColumn {
+  const char* name;
+  std::vector<double> values;
+};
+
+std::vector<StageColumn> StageColumns(const RunResult& r) {
+  return {
+      {"extract_ms", Column(r, [](const FrameRecord& f) { return f.report.times.extract_ms; })},
+      {"track_ms", Column(r, [](const FrameRecord& f) { return f.report.times.track_ms; })},
+      {"local_map_ms", Column(r, [](const FrameRecord& f) { return f.report.times.local_map_ms; })},
+      {"keyframe_ms", Column(r, [](const FrameRecord& f) { return f.report.times.keyframe_ms; })},
+      {"total_ms", Column(r, [](const FrameRecord& f) { return f.report.times.total_ms; })},
+      {"mask_ms", Column(r, [](const FrameRecord& f) { return f.mask_ms; })}};
+}
+
+struct StateCounts {
+  int ok = 0, lost = 0, not_initialized = 0, keyframes = 0;
+};
+
+StateCounts CountStates(const RunResult& result) {
+  StateCounts counts;
+  for (const FrameRecord& f : result.frames) {
+    if (f.report.state == slam::TrackingState::kOk) ++counts.ok;
+    if (f.report.state == slam::TrackingState::kLost) ++counts.lost;
+    if (f.report.state == slam::TrackingState::kNotInitialized) ++counts.not_initialized;
+    if (f.report.new_keyframe) ++counts.keyframes;
+  }
+  return counts;
+}
+
+double Fps(const RunResult& result) {
+  return result.wall_s > 0 ? static_cast<double>(result.frames.size()) / result.wall_s : 0.0;
+}
+
+nlohmann::json SettingsJson(const RunDescription& d) {
+  const io::OrbSlamSettings& s = d.settings;
+  return {{"path", d.settings_path},
+          {"fx", s.camera.fx},
+          {"fy", s.camera.fy},
+          {"cx", s.camera.cx},
+          {"cy", s.camera.cy},
+          {"bf", s.bf},
+          {"fps", s.fps},
+          {"th_depth", s.th_depth},
+          {"depth_map_factor", s.depth_map_factor},
+          {"orb_features", s.orb.num_features},
+          {"orb_scale_factor", s.orb.scale_factor},
+          {"orb_levels", s.orb.num_levels},
+          {"orb_ini_th_fast", s.orb.ini_th_fast},
+          {"orb_min_th_fast", s.orb.min_th_fast}};
+}
+
+}  // namespace
+
+double Percentile(std::vector<double> values, double percent) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double rank = percent / 100.0 * static_cast<double>(values.size() - 1);
+  const size_t below = static_cast<size_t>(std::floor(rank));
+  const size_t above = std::min(below + 1, values.size() - 1);
+  return values[below] + (rank - static_cast<double>(below)) * (values[above] - values[below]);
+}
+
+void WriteOrbSlamTum(const eval::Trajectory& trajectory, int pose_decimals,
+                     const std::string& path) {
+  if (trajectory.size() != trajectory.timestamps.size()) {
+    ThrowInFile(path, "a TUM trajectory needs one timestamp per pose");
+  }
+  std::ofstream out = OpenForWriting(path);
+  for (size_t i = 0; i < trajectory.size(); ++i) {
+    const Eigen::Vector3d& t = trajectory.poses[i].translation();
+    const Eigen::Quaterniond& q = trajectory.poses[i].rotation();
+    const int p = pose_decimals;
+    out << fmt::format("{:.6f} {:.{}f} {:.{}f} {:.{}f} {:.{}f} {:.{}f} {:.{}f} {:.{}f}\n",
+                       trajectory.timestamps[i], t.x(), p, t.y(), p, t.z(), p, q.x(), p, q.y(), p,
+                       q.z(), p, q.w(), p);
+  }
+  CheckWritten(out, path);
+}
+
+void WriteOrbSlamKitti(const eval::Trajectory& trajectory, const std::string& path) {
+  std::ofstream out = OpenForWriting(path);
+  for (size_t i = 0; i < trajectory.size(); ++i) {
+    const geometry::Matrix3x4d m = trajectory.poses[i].Matrix3x4();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 4; ++c)
+        out << fmt::format("{:.9f}{}", m(r, c), r == 2 && c == 3 ? '\n' : ' ');
+    }
+  }
+  CheckWritten(out, path);
+}
+
+void WriteFramesCsv(const RunResult& result, const std::string& path) {
+  std::ofstream out = OpenForWriting(path);
+  out << kFramesCsvHeader << "\n";
+  for (const FrameRecord& f : result.frames) {
+    const slam::FrameReport& r = f.report;
+    out << fmt::format(
+        "{},{:.6f},{},{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f}\n", f.index,
+        f.timestamp, StateName(r.state), CsvField(r.reason), r.num_features, r.num_matches,
+        r.num_inliers, r.new_keyframe ? 1 : 0, r.times.extract_ms, r.times.track_ms,
+        r.times.local_map_ms, r.times.keyframe_ms, r.times.total_ms, f.mask_ms, f.mask_fraction);
+  }
+  CheckWritten(out, path);
+}
+
+std::optional<RunAte> EvaluateRun(const io::Sequence& sequence, const std::string& camera_path,
+                                  const std::string& plot_path) {
+  if (!sequence.ground_truth_path) return std::nullopt;
+  try {
+    eval::TrajectoryInputs inputs;
+    inputs.gt_path = *sequence.ground_truth_path;
+    inputs.est_path = camera_path;
+    inputs.est_format = eval::TrajectoryFormat::kTum;
+    eval::TrajectoryPair pair = eval::LoadTrajectories(inputs);
+    const std::string times = (fs::path(sequence.root) / "times.txt").string();
+    std::error_code ec;
+    if (!pair.gt.has_timestamps() && fs::exists(times, ec)) eval::AttachTimes(times, &pair.gt);
+    eval::EvalRequest request;  // `moslam eval ate`'s defaults: tum convention, se3 alignment
+    const eval::AteOptions options = eval::MakeAteOptions(request, pair);
+    RunAte ate{eval::ComputeAte(pair.gt, pair.est, options), {}, {}};
+    ate.json = eval::AteToJson(ate.result, pair.gt, pair.est);
+    ate.text = eval::FormatAteReport(ate.result, pair.gt, pair.est, /*rotation=*/false);
+    if (!plot_path.empty()) {
+      eval::WriteTrajectoryPlot(eval::MakeAtePlotData(ate.result, pair.est, false), plot_path);
+    }
+    return ate;
+  } catch (const InputError& e) {
+    // A run that tracked too little to align is a result, not a failure of the command.
+    spdlog::warn("ATE not computed: {}", e.what());
+    return std::nullopt;
+  }
+}
+
+nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
+                           const std::optional<RunAte>& ate) {
+  const StateCounts counts = CountStates(result);
+  nlohmann::json times = nlohmann::json::object();
+  for (const StageColumn& column : StageColumns(result)) {
+    const eval::ErrorStatistics stats = eval::ComputeStatistics(column.values);
+    times[column.name] = {{"median", stats.median},
+                          {"mean", stats.mean},
+                          {"p90", Percentile(column.values, 90.0)},
+                          {"max", stats.max}};
+  }
+  nlohmann::json json = {{"frames", result.frames.size()},
+                         {"frame_range", {result.first, result.last}},
+                         {"tracked", counts.ok},
+                         {"lost", counts.lost},
+                         {"not_initialized", counts.not_initialized},
+                         {"new_keyframe_frames", counts.keyframes},
+                         {"keyframes", result.map.keyframes},
+                         {"map_points", result.map.map_points},
+                         {"camera_poses", result.camera.size()},
+                         {"mapping",
+                          {{"steps", result.map.mapping_steps},
+                           {"median_ms", result.map.mapping_ms_median},
+                           {"total_ms", result.map.mapping_ms_total}}},
+                         {"times_ms", times},
+                         {"wall_s", result.wall_s},
+                         {"fps", Fps(result)},
+                         {"settings", SettingsJson(d)},
+                         {"dataset",
+                          {{"path", d.dataset_path},
+                           {"format", io::ToString(d.format)},
+                           {"sensor", io::ToString(d.sensor)}}},
+                         {"mask_source", d.mask_source},
+                         {"deterministic", d.deterministic},
+                         {"realtime", d.realtime}};
+  json["ate"] = ate ? ate->json : nlohmann::json(nullptr);
+  return json;
+}
+
+std::string FormatSummary(const RunResult& result, const RunDescription& d,
+                          const std::optional<RunAte>& ate) {
+  const StateCounts counts = CountStates(result);
+  std::string text;
+  text += fmt::format("data set     {} ({}, {})\n", d.dataset_path, io::ToString(d.format),
+                      io::ToString(d.sensor));
+  text += fmt::format("frames       {} ({}:{}): {} tracked, {} lost, {} not initialized\n",
+                      result.frames.size(), result.first, result.last, counts.ok, counts.lost,
+                      counts.not_initialized);
+  text += fmt::format("map          {} keyframes, {} map points\n", result.map.keyframes,
+                      result.map.map_points);
+  text += fmt::format("masks        {}\n", d.mask_source);
+  text += fmt::format("time         {:.2f} s, {:.1f} frames/s{}\n", result.wall_s, Fps(result),
+                      d.realtime ? " (real-time pacing)" : "");
+  text += "stage ms     median     mean      p90\n";
+  for (const StageColumn& column : StageColumns(result)) {
+    const eval::ErrorStatistics stats = eval::ComputeStatistics(column.values);
+    text += fmt::format("  {:<12} {:8.2f} {:8.2f} {:8.2f}\n", column.name, stats.median, stats.mean,
+                        Percentile(column.values, 90.0));
+  }
+  if (ate) text += "ATE\n" + ate->text;
+  return text;
+}
+
+std::string WriteRunOutputs(const io::Sequence& sequence, const RunResult& result,
+                            const RunDescription& description, const std::string& out_dir) {
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) ThrowInFile(out_dir, "output folder cannot be created: " + ec.message());
+  const fs::path out(out_dir);
+  const std::string camera_path = (out / "CameraTrajectory.txt").string();
+  WriteOrbSlamTum(result.camera, 9, camera_path);
+  if (description.format == io::DatasetFormat::kKitti) {
+    WriteOrbSlamKitti(result.camera, (out / "CameraTrajectory_kitti.txt").string());
+  }
+  WriteOrbSlamTum(result.keyframes, 7, (out / "KeyFrameTrajectory.txt").string());
+  WriteFramesCsv(result, (out / "frames.csv").string());
+  const std::optional<RunAte> ate =
+      EvaluateRun(sequence, camera_path, (out / "trajectory.png").string());
+  const std::string summary_path = (out / "summary.json").string();
+  std::ofstream summary = OpenForWriting(summary_path);
+  summary << SummaryJson(result, description, ate).dump(2) << "\n";
+  CheckWritten(summary, summary_path);
+  spdlog::info("outputs written to {}", out_dir);
+  return FormatSummary(result, description, ate);
+}
+
+}  // namespace moslam::runner

@@ -1,0 +1,78 @@
+// The files `moslam run` leaves in its output folder, and its printed summary:
+//
+//   CameraTrajectory.txt        TUM `t tx ty tz qx qy qz qw`, every frame with a pose; ORB-SLAM2's
+//                               SaveTrajectoryTUM precision (stamp 6 decimals, pose 9)
+//   CameraTrajectory_kitti.txt  KITTI input only: the 3x4 T_world_cam row-major, 9 decimals
+//                               (ORB-SLAM2's SaveTrajectoryKITTI); frames without a pose are absent
+//   KeyFrameTrajectory.txt      TUM, keyframes; SaveKeyFrameTrajectoryTUM precision (6 / 7)
+//   frames.csv                  one row per frame, kFramesCsvHeader's columns
+//   summary.json                counts, per-stage time statistics, settings, data set, mask source,
+//                               and the ATE when the data set has ground truth
+//   trajectory.png              ground truth against the aligned estimate (with ground truth only)
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "moslam/eval/ate.h"
+#include "moslam/eval/trajectory.h"
+#include "moslam/io/dataset.h"
+#include "moslam/io/orbslam_settings.h"
+#include "moslam/io/sequence.h"
+#include "moslam/runner/run_loop.h"
+
+namespace moslam::runner {
+
+inline constexpr const char* kFramesCsvHeader =
+    "index,timestamp,state,reason,features,matches,inliers,keyframe,extract_ms,track_ms,"
+    "local_map_ms,keyframe_ms,total_ms,mask_ms,mask_fraction";
+
+// Writers; InputError naming the file when it cannot be written.
+void WriteOrbSlamTum(const eval::Trajectory& trajectory, int pose_decimals,
+                     const std::string& path);
+void WriteOrbSlamKitti(const eval::Trajectory& trajectory, const std::string& path);
+void WriteFramesCsv(const RunResult& result, const std::string& path);
+
+// What the run was, for summary.json and the printed summary.
+struct RunDescription {
+  std::string dataset_path;
+  io::DatasetFormat format = io::DatasetFormat::kAuto;  // as read; kKitti adds the KITTI file
+  io::SensorType sensor = io::SensorType::kStereo;
+  std::string settings_path;
+  io::OrbSlamSettings settings;
+  std::string mask_source;  // MaskSource::Describe()
+  bool deterministic = false;
+  bool realtime = false;
+};
+
+// The ATE of the run against the data set's ground truth.
+struct RunAte {
+  eval::AteResult result;
+  nlohmann::json json;  // eval::AteToJson
+  std::string text;     // eval::FormatAteReport
+};
+
+// ATE of `camera_path` (the TUM file just written) against sequence.ground_truth_path, matched
+// by timestamp: a ground truth without stamps (KITTI poses.txt) takes those of <root>/times.txt.
+// Writes the trajectory plot to `plot_path` when it is not empty. nullopt, with a warning, when
+// the sequence has no ground truth or too few poses associate.
+std::optional<RunAte> EvaluateRun(const io::Sequence& sequence, const std::string& camera_path,
+                                  const std::string& plot_path);
+
+nlohmann::json SummaryJson(const RunResult& result, const RunDescription& description,
+                           const std::optional<RunAte>& ate);
+// The human summary printed on stdout.
+std::string FormatSummary(const RunResult& result, const RunDescription& description,
+                          const std::optional<RunAte>& ate);
+
+// Writes every output into `out_dir` (created if needed) and returns the printed summary.
+// CameraTrajectory_kitti.txt is written for KITTI input (description.format) only.
+std::string WriteRunOutputs(const io::Sequence& sequence, const RunResult& result,
+                            const RunDescription& description, const std::string& out_dir);
+
+// numpy.percentile (linear interpolation) of `values` at `percent` in [0, 100]; 0 when empty.
+double Percentile(std::vector<double> values, double percent);
+
+}  // namespace moslam::runner

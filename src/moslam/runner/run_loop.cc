@@ -1,0 +1,136 @@
+#include "moslam/runner/run_loop.h"
+
+#include <chrono>
+#include <thread>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "moslam/util/error.h"
+#include "moslam/util/progress.h"
+#include "moslam/util/strings.h"
+
+namespace moslam::runner {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+const char* StateName(slam::TrackingState state) {
+  switch (state) {
+    case slam::TrackingState::kNotInitialized:
+      return "not_initialized";
+    case slam::TrackingState::kOk:
+      return "ok";
+    case slam::TrackingState::kLost:
+      return "lost";
+  }
+  return "?";
+}
+
+FrameRange ParseFrameRange(const std::string& text) {
+  const size_t colon = text.find(':');
+  if (colon == std::string::npos || text.find(':', colon + 1) != std::string::npos) {
+    ThrowInput("--frames: expected A:B, A: or :B (frame indices, B excluded), got '{}'", text);
+  }
+  auto parse = [&](std::string_view part) -> std::optional<size_t> {
+    part = Trim(part);
+    if (part.empty()) return std::nullopt;
+    const auto value = ParseInt(part);
+    if (!value || *value < 0) {
+      ThrowInput("--frames: '{}' is not a frame index (a whole number >= 0) in '{}'", part, text);
+    }
+    return static_cast<size_t>(*value);
+  };
+  FrameRange range;
+  range.first = parse(std::string_view(text).substr(0, colon)).value_or(0);
+  range.last = parse(std::string_view(text).substr(colon + 1));
+  if (range.last && *range.last <= range.first) {
+    ThrowInput("--frames: the range '{}' is empty (B must be greater than A)", text);
+  }
+  return range;
+}
+
+void RunOptions::Check() const {
+  if (queue_capacity == 0) ThrowInput("run.queue_capacity: must be > 0");
+  if (!(depth_factor > 0.0)) ThrowInput("run.depth_factor: must be > 0, got {}", depth_factor);
+}
+
+LoadedFrame LoadFrame(const io::FrameEntry& frame, const MaskSource& masks,
+                      const RunOptions& options) {
+  LoadedFrame loaded;
+  loaded.index = frame.index;
+  const auto start = Clock::now();
+  io::FrameImages images = io::LoadFrameImages(frame, options.colour, options.depth_factor);
+  loaded.load_ms = MsSince(start);
+  const auto mask_start = Clock::now();
+  FrameMask mask = masks.MaskFor(frame, images.left.size());
+  loaded.mask_ms = MsSince(mask_start);
+  loaded.mask_fraction = mask.fraction;
+  loaded.input.timestamp = frame.timestamp;
+  loaded.input.image = std::move(images.left);
+  loaded.input.right = std::move(images.right);
+  loaded.input.depth = std::move(images.depth);
+  loaded.input.mask = std::move(mask.mask);
+  return loaded;
+}
+
+RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, const MaskSource& masks,
+                      const RunOptions& options) {
+  options.Check();
+  RunResult result;
+  result.first = options.frames.first;
+  result.last = options.frames.last.value_or(sequence.size());
+  if (result.last > sequence.size() || result.first >= result.last) {
+    ThrowInput("--frames: {}:{} is outside the sequence's {} frames (0:{})", result.first,
+               result.last, sequence.size(), sequence.size());
+  }
+  const size_t count = result.last - result.first;
+  result.frames.reserve(count);
+  const auto start = Clock::now();
+  std::optional<Progress> progress;
+  if (options.progress) progress.emplace("tracking", count, 2.0, "frames");
+  {
+    // Destroyed before Finish(): stops and joins the loader also when Track() or loading threw.
+    FrameLoader loader(
+        sequence, result.first, result.last,
+        [&masks, &options](const io::FrameEntry& f) { return LoadFrame(f, masks, options); },
+        options.queue_capacity);
+    const double first_stamp = sequence.frames[result.first].timestamp;
+    while (std::optional<LoadedFrame> frame = loader.Next()) {
+      if (options.realtime) {
+        // Pacing is the one legitimate sleep: a frame is not given to the tracker before its
+        // time on the data set's clock, counted from the first frame.
+        const auto due =
+            start + std::chrono::duration_cast<Clock::duration>(
+                        std::chrono::duration<double>(frame->input.timestamp - first_stamp));
+        std::this_thread::sleep_until(due);
+      }
+      FrameRecord record;
+      record.index = frame->index;
+      record.timestamp = frame->input.timestamp;
+      record.mask_ms = frame->mask_ms;
+      record.mask_fraction = frame->mask_fraction;
+      record.report = tracker.Track(frame->input);
+      spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,
+                    record.timestamp, StateName(record.report.state), record.report.num_features,
+                    record.report.num_inliers, record.report.times.total_ms);
+      result.frames.push_back(std::move(record));
+      if (progress) progress->Update(result.frames.size());
+    }
+  }
+  if (progress) progress->Finish();
+  tracker.Finish();
+  result.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  result.camera = tracker.CameraTrajectory();
+  result.keyframes = tracker.KeyFrameTrajectory();
+  result.map = tracker.Summary();
+  return result;
+}
+
+}  // namespace moslam::runner

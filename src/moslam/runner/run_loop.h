@@ -1,0 +1,68 @@
+// The loop of `moslam run` as a library function: frames of a sequence, loaded ahead in their own
+// thread (frame_loader.h), go through a Tracker one at a time; each frame's report and timings
+// are recorded; at the end the tracker is finished and its trajectories collected. Writing the
+// outputs is outputs.h's job.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "moslam/eval/trajectory.h"
+#include "moslam/io/image.h"
+#include "moslam/io/sequence.h"
+#include "moslam/runner/frame_loader.h"
+#include "moslam/runner/mask_source.h"
+#include "moslam/runner/tracker.h"
+
+namespace moslam::runner {
+
+// A half-open range of frame indices [first, last).
+struct FrameRange {
+  size_t first = 0;
+  std::optional<size_t> last;  // nullopt: to the end of the sequence
+};
+// "A:B" (frames A..B-1), "A:" (from A), ":B" (up to B-1), as Python slices without negatives.
+// InputError for anything else.
+FrameRange ParseFrameRange(const std::string& text);
+
+struct RunOptions {
+  FrameRange frames;          // sub-range to run; checked against the sequence in RunSequence
+  bool realtime = false;      // pace frames by their timestamps instead of running flat out
+  bool progress = true;       // periodic progress line (frames/s, ETA) via util/progress.h
+  size_t queue_capacity = 4;  // frames loaded ahead of tracking (> 0)
+  io::ColourMode colour = io::ColourMode::kGrey;  // how the left image is loaded
+  double depth_factor = io::kTumDepthFactor;      // raw depth units per metre (RGB-D)
+  void Check() const;                             // InputError naming the field
+};
+
+// One frame as frames.csv records it.
+struct FrameRecord {
+  int index = 0;
+  double timestamp = 0.0;
+  slam::FrameReport report;
+  double mask_ms = 0.0;
+  double mask_fraction = 0.0;
+};
+
+struct RunResult {
+  size_t first = 0;  // the range that was run
+  size_t last = 0;
+  std::vector<FrameRecord> frames;
+  eval::Trajectory camera;     // Tracker::CameraTrajectory after Finish
+  eval::Trajectory keyframes;  // Tracker::KeyFrameTrajectory after Finish
+  slam::MapSummary map;
+  double wall_s = 0.0;  // from the start of loading to the end of Finish
+};
+
+// Loads one frame the way RunSequence does: images per `options`, then the mask.
+LoadedFrame LoadFrame(const io::FrameEntry& frame, const MaskSource& masks,
+                      const RunOptions& options);
+
+// Runs sequence.frames[range] through `tracker`. Loading errors (InputError naming the file)
+// are rethrown here after the loader thread has stopped.
+RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, const MaskSource& masks,
+                      const RunOptions& options);
+
+}  // namespace moslam::runner

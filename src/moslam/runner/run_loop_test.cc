@@ -1,0 +1,243 @@
+// The run loop with a fake tracker on tiny TUM- and KITTI-layout sequences: output files and
+// their formats, frame ranges, and clean stops at the end and on errors in either thread.
+#include "moslam/runner/run_loop.h"
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "moslam/eval/trajectory_io.h"
+#include "moslam/io/dataset.h"
+#include "moslam/runner/outputs.h"
+#include "moslam/runner/test_sequences.h"
+#include "moslam/testing/error_of.h"
+#include "moslam/util/strings.h"
+
+namespace moslam::runner {
+namespace {
+
+namespace fs = std::filesystem;
+using ::moslam::testing::ErrorOf;
+using test::FakeTracker;
+using ::testing::HasSubstr;
+
+std::vector<std::string> Lines(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+size_t FieldCount(const std::string& line) { return SplitFields(line).size(); }
+
+RunOptions Quiet() {
+  RunOptions options;
+  options.progress = false;
+  return options;
+}
+
+RunDescription Describe(const io::Sequence& seq, const MaskSource& masks) {
+  RunDescription d;
+  d.dataset_path = seq.root;
+  d.format = io::DetectDatasetFormat(seq.root).value();
+  d.sensor = seq.sensor;
+  d.settings_path = "none";
+  d.mask_source = masks.Describe();
+  return d;
+}
+
+TEST(RunLoopTest, TumRunWritesEveryOutputInItsFormat) {
+  testing::TempDir data, out;
+  test::MakeTum(data, 6);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  FakeTracker tracker;
+  tracker.lost = [](int i) { return i == 3; };
+  const auto masks = MakeMaskSource({}, seq);
+  const RunResult result = RunSequence(seq, tracker, *masks, Quiet());
+  EXPECT_TRUE(tracker.finished);
+  ASSERT_EQ(result.frames.size(), 6u);
+  EXPECT_TRUE(tracker.had_depth[0]);
+  EXPECT_FALSE(tracker.had_right[0]);
+  EXPECT_TRUE(tracker.masks[0].empty());
+
+  const std::string text = WriteRunOutputs(seq, result, Describe(seq, *masks), out.path());
+  const fs::path dir(out.path());
+  // TUM camera trajectory: one line per tracked frame, 8 fields, ORB-SLAM2's decimals.
+  const auto camera = Lines((dir / "CameraTrajectory.txt").string());
+  ASSERT_EQ(camera.size(), 5u);
+  for (const std::string& line : camera) EXPECT_EQ(FieldCount(line), 8u) << line;
+  EXPECT_THAT(camera[0], ::testing::StartsWith(test::Stamp(0) + " "));
+  EXPECT_EQ(SplitFields(camera[0])[1].size(), std::string("100.000000000").size());
+  const eval::Trajectory read = eval::ReadTum((dir / "CameraTrajectory.txt").string());
+  EXPECT_NEAR(read.poses[4].translation().z(), test::PoseAt(test::StampValue(5)).translation().z(),
+              1e-8);
+  EXPECT_FALSE(fs::exists(dir / "CameraTrajectory_kitti.txt"));
+  // Keyframes: frames 0, 2, 4; seven decimals.
+  const auto keyframes = Lines((dir / "KeyFrameTrajectory.txt").string());
+  ASSERT_EQ(keyframes.size(), 3u);
+  EXPECT_EQ(FieldCount(keyframes[1]), 8u);
+  EXPECT_EQ(SplitFields(keyframes[0])[1].size(), std::string("100.0000000").size());
+  // Per-frame log.
+  const auto csv = Lines((dir / "frames.csv").string());
+  ASSERT_EQ(csv.size(), 7u);
+  EXPECT_EQ(csv[0], kFramesCsvHeader);
+  EXPECT_EQ(SplitFields(csv[0], true).size(), 15u);
+  EXPECT_THAT(csv[1], ::testing::StartsWith("0," + test::Stamp(0) + ",ok,,100,80,60,1,1.000,"));
+  EXPECT_THAT(csv[4], HasSubstr(",lost,\"too few matches, said the fake\",103,"));
+  // Summary with the ATE against groundtruth.txt: the fake reports the true poses.
+  std::ifstream in((dir / "summary.json").string());
+  const nlohmann::json summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["frames"], 6);
+  EXPECT_EQ(summary["tracked"], 5);
+  EXPECT_EQ(summary["lost"], 1);
+  EXPECT_EQ(summary["keyframes"], 3);
+  EXPECT_EQ(summary["map_points"], 21);
+  EXPECT_DOUBLE_EQ(summary["times_ms"]["extract_ms"]["median"].get<double>(), 3.5);
+  EXPECT_DOUBLE_EQ(summary["times_ms"]["extract_ms"]["p90"].get<double>(), 5.5);
+  EXPECT_EQ(summary["mask_source"], "none");
+  ASSERT_TRUE(summary["ate"].is_object()) << summary.dump(2);
+  EXPECT_EQ(summary["ate"]["translation_m"]["count"], 5);
+  EXPECT_LT(summary["ate"]["translation_m"]["rmse"].get<double>(), 1e-6);
+  EXPECT_TRUE(fs::exists(dir / "trajectory.png"));
+  EXPECT_THAT(text, HasSubstr("5 tracked, 1 lost"));
+  EXPECT_THAT(text, HasSubstr("ATE"));
+}
+
+TEST(RunLoopTest, KittiRunAddsKittiTrajectoryAndEvaluatesByTimesTxt) {
+  testing::TempDir data, out;
+  test::MakeKitti(data, 5);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  ASSERT_EQ(seq.sensor, io::SensorType::kStereo);
+  FakeTracker tracker;
+  const auto masks = MakeMaskSource({}, seq);
+  RunOptions options = Quiet();
+  options.frames = ParseFrameRange("1:");
+  const RunResult result = RunSequence(seq, tracker, *masks, options);
+  ASSERT_EQ(result.frames.size(), 4u);
+  EXPECT_EQ(result.frames.front().index, 1);
+  EXPECT_TRUE(tracker.had_right[0]);
+  EXPECT_FALSE(tracker.had_depth[0]);
+  WriteRunOutputs(seq, result, Describe(seq, *masks), out.path());
+  const fs::path dir(out.path());
+  const auto kitti = Lines((dir / "CameraTrajectory_kitti.txt").string());
+  ASSERT_EQ(kitti.size(), 4u);
+  for (const std::string& line : kitti) EXPECT_EQ(FieldCount(line), 12u) << line;
+  const eval::Trajectory read = eval::ReadKitti((dir / "CameraTrajectory_kitti.txt").string());
+  EXPECT_NEAR(read.poses[3].translation().x(), test::PoseAt(0.4).translation().x(), 1e-8);
+  EXPECT_EQ(Lines((dir / "CameraTrajectory.txt").string()).size(), 4u);
+  std::ifstream in((dir / "summary.json").string());
+  const nlohmann::json summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["frame_range"], nlohmann::json::array({1, 5}));
+  ASSERT_TRUE(summary["ate"].is_object()) << summary.dump(2);
+  EXPECT_EQ(summary["ate"]["translation_m"]["count"], 4);  // frames 1-4 matched by times.txt
+  EXPECT_LT(summary["ate"]["translation_m"]["rmse"].get<double>(), 1e-6);
+}
+
+// The shared KITTI 06 excerpt through the loading thread, with a tracker that answers poses.txt:
+// real images load as stereo pairs and the summary's ATE, matched through times.txt, is ~0.
+TEST(RunLoopTest, SharedKittiExcerptWithGroundTruthTracker) {
+  MOSLAM_SHARED_OR_SKIP(kitti, "data/kitti/06_000000-000050");
+  testing::TempDir out;
+  const io::Sequence seq = io::ReadDataset(kitti);
+  const eval::Trajectory gt = eval::ReadKitti(*seq.ground_truth_path);
+  ASSERT_EQ(gt.size(), seq.size());
+  FakeTracker tracker;
+  tracker.pose = [&gt](int i, double) { return gt.poses[i]; };
+  const auto masks = MakeMaskSource({}, seq);
+  const RunResult result = RunSequence(seq, tracker, *masks, Quiet());
+  ASSERT_EQ(result.frames.size(), seq.size());
+  EXPECT_EQ(tracker.images[0].type(), CV_8UC1);
+  EXPECT_EQ(tracker.images[0].size(), cv::Size(1226, 370));
+  EXPECT_TRUE(tracker.had_right[50]);
+  WriteRunOutputs(seq, result, Describe(seq, *masks), out.path());
+  EXPECT_EQ(Lines(out.path() + "/CameraTrajectory_kitti.txt").size(), seq.size());
+  std::ifstream in(out.path() + "/summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(in);
+  ASSERT_TRUE(summary["ate"].is_object());
+  EXPECT_EQ(summary["ate"]["translation_m"]["count"], 51);
+  EXPECT_LT(summary["ate"]["translation_m"]["rmse"].get<double>(), 1e-5);
+}
+
+TEST(RunLoopTest, FrameRangeSelectsAndIsChecked) {
+  testing::TempDir data;
+  test::MakeKitti(data, 5);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  const auto masks = MakeMaskSource({}, seq);
+  FakeTracker tracker;
+  RunOptions options = Quiet();
+  options.frames = ParseFrameRange("1:3");
+  const RunResult result = RunSequence(seq, tracker, *masks, options);
+  ASSERT_EQ(result.frames.size(), 2u);
+  EXPECT_EQ(result.frames[1].index, 2);
+  options.frames = ParseFrameRange("2:9");
+  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, options); }),
+              HasSubstr("outside the sequence's 5 frames"));
+}
+
+TEST(RunLoopTest, ParseFrameRangeForms) {
+  EXPECT_EQ(ParseFrameRange("3:7").first, 3u);
+  EXPECT_EQ(ParseFrameRange("3:7").last, 7u);
+  EXPECT_FALSE(ParseFrameRange("3:").last.has_value());
+  EXPECT_EQ(ParseFrameRange(":7").first, 0u);
+  EXPECT_THAT(ErrorOf([] { ParseFrameRange("7"); }), HasSubstr("expected A:B"));
+  EXPECT_THAT(ErrorOf([] { ParseFrameRange("5:5"); }), HasSubstr("empty"));
+  EXPECT_THAT(ErrorOf([] { ParseFrameRange("-1:5"); }), HasSubstr("'-1'"));
+}
+
+TEST(RunLoopTest, LoaderErrorReachesTheCallerAfterEarlierFrames) {
+  testing::TempDir data;
+  test::MakeKitti(data, 12);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  const std::string missing = data.path() + "/image_1/000007.png";
+  fs::remove(missing);  // the reader saw it; loading frame 7 fails
+  const auto masks = MakeMaskSource({}, seq);
+  FakeTracker tracker;
+  RunOptions options = Quiet();
+  options.queue_capacity = 1;
+  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, options); }), HasSubstr(missing));
+  EXPECT_EQ(tracker.masks.size(), 7u);  // frames 0-6 were tracked, in order, before the error
+  EXPECT_FALSE(tracker.finished);
+}
+
+TEST(RunLoopTest, TrackerErrorStopsTheLoaderWithoutDeadlock) {
+  testing::TempDir data;
+  test::MakeKitti(data, 12);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  const auto masks = MakeMaskSource({}, seq);
+  FakeTracker tracker;
+  tracker.before_track = [](int i) {
+    if (i == 2) throw std::runtime_error("tracker failed");
+  };
+  RunOptions options = Quiet();
+  options.queue_capacity = 1;  // the loader is blocked on a full queue when the tracker throws
+  EXPECT_THROW(RunSequence(seq, tracker, *masks, options), std::runtime_error);
+  EXPECT_EQ(tracker.masks.size(), 2u);
+}
+
+TEST(RunLoopTest, RealtimeIsNeverAheadOfTheTimestamps) {
+  testing::TempDir data;
+  test::MakeKitti(data, 4);  // 0.3 s of data
+  const io::Sequence seq = io::ReadDataset(data.path());
+  const auto masks = MakeMaskSource({}, seq);
+  FakeTracker tracker;
+  RunOptions options = Quiet();
+  options.realtime = true;
+  const RunResult result = RunSequence(seq, tracker, *masks, options);
+  ASSERT_EQ(result.frames.size(), 4u);
+  // sleep_until never wakes early, so the run lasts at least the data's span.
+  EXPECT_GE(result.wall_s, 0.3);
+}
+
+TEST(RunLoopTest, PercentileIsNumpys) {
+  EXPECT_DOUBLE_EQ(Percentile({}, 90), 0.0);
+  EXPECT_DOUBLE_EQ(Percentile({5.0}, 90), 5.0);
+  EXPECT_DOUBLE_EQ(Percentile({4, 1, 3, 2}, 50), 2.5);
+  EXPECT_DOUBLE_EQ(Percentile({1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}, 90), 10.0);
+}
+
+}  // namespace
+}  // namespace moslam::runner

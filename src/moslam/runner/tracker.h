@@ -1,0 +1,26 @@
+// What the run loop drives: anything that takes frames and gives per-frame reports and, at the
+// end, trajectories. slam::System is adapted to it by the `moslam run` command; tests use fakes,
+// so this module needs only slam's value types (slam/system.h, header only), not the SLAM core.
+#pragma once
+
+#include "moslam/eval/trajectory.h"
+#include "moslam/slam/system.h"
+
+namespace moslam::runner {
+
+class Tracker {
+ public:
+  virtual ~Tracker() = default;
+  virtual slam::FrameReport Track(const slam::FrameInput& input) = 0;
+  // Called once after the last frame: drain background work (local mapping), stop threads.
+  virtual void Finish() = 0;
+  virtual eval::Trajectory CameraTrajectory() const = 0;
+  virtual eval::Trajectory KeyFrameTrajectory() const = 0;
+  virtual slam::MapSummary Summary() const = 0;
+};
+
+// "not_initialized", "ok", "lost" (slam::ToString lives in the SLAM core, which runner does not
+// link).
+const char* StateName(slam::TrackingState state);
+
+}  // namespace moslam::runner
