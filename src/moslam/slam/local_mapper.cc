@@ -32,6 +32,7 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
   TriangulationSearch search;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
+    if (keyframe->bad()) return;  // erased while it waited in the queue
     InsertKeyFrame(keyframe);
     CullRecentPoints(keyframe);
     search = PrepareTriangulationSearch(keyframe, camera_);

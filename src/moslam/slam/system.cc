@@ -106,11 +106,9 @@ class System::Impl : public KeyFrameSink {
   }
   size_t QueuedKeyFrames() const override { return queue_.size(); }
   void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) override {
-    if (options_.deterministic) {
-      mapper_.ProcessKeyFrame(keyframe);
-    } else {
-      queue_.Push(keyframe);
-    }
+    // Synchronous in deterministic mode, and after Finish() closed the queue (Track() may still
+    // be called then; its keyframes are mapped in the caller's thread).
+    if (options_.deterministic || !queue_.Push(keyframe)) mapper_.ProcessKeyFrame(keyframe);
   }
 
   FrameReport Track(const FrameInput& input) {

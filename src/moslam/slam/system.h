@@ -56,10 +56,10 @@ struct StageTimes {
 
 struct FrameReport {
   TrackingState state = TrackingState::kNotInitialized;
-  std::string reason;          // why not ok ("too few matches with the motion model", ...)
-  int num_features = 0;        // keypoints extracted
-  int num_matches = 0;         // matches from motion-model / reference-keyframe tracking
-  int num_inliers = 0;         // map points tracked after local-map pose optimization
+  std::string reason;    // why not ok ("too few matches with the motion model", ...)
+  int num_features = 0;  // keypoints extracted
+  int num_matches = 0;   // matches from motion-model / reference-keyframe tracking
+  int num_inliers = 0;   // map points tracked after local-map pose optimization
   bool new_keyframe = false;
   StageTimes times;
   std::optional<geometry::SE3> T_world_cam;  // when tracking is ok (or just initialized)

@@ -54,6 +54,7 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
 
   if (!initialized_) {
     const auto t0 = Clock::now();
+    std::shared_ptr<map::KeyFrame> keyframe;
     {
       std::lock_guard<std::mutex> lock(map_->mutex());
       if (!Initialize()) {
@@ -61,14 +62,15 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
         RecordPose(false);
         return out;
       }
+      keyframe = reference_;
+      out.num_inliers = keyframe->TrackedMapPoints(1);
+      RecordPose(true);  // reads the keyframe's pose: under the lock, mapping may move it
     }
-    sink_->InsertKeyFrame(reference_);
+    sink_->InsertKeyFrame(keyframe);
     out.keyframe_ms = MsSince(t0);
     out.status = TrackStatus::kInitialized;
     out.new_keyframe = true;
-    out.num_inliers = reference_->TrackedMapPoints(1);
     out.T_cam_world = current_.T_cam_world;
-    RecordPose(true);
     last_ = std::move(current_);
     last_ok_ = true;
     return out;
@@ -114,13 +116,13 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
     if (NeedNewKeyFrame()) keyframe = CreateKeyFrame();
+    RecordPose(true);  // reads the reference keyframe's pose: under the lock
   }
   if (keyframe) sink_->InsertKeyFrame(keyframe);
   out.keyframe_ms = MsSince(t0);
   out.new_keyframe = keyframe != nullptr;
   out.status = TrackStatus::kOk;
   out.T_cam_world = current_.T_cam_world;
-  RecordPose(true);
   // ORB-SLAM2 drops the outliers before the frame becomes the last frame.
   for (size_t i = 0; i < current_.points.size(); ++i) {
     if (current_.outlier[i]) current_.points[i] = nullptr;
@@ -163,6 +165,8 @@ void Tracker::RefreshLastFrame() {
     auto replacement = p->replaced_by.lock();
     p = (replacement && !replacement->bad) ? replacement : nullptr;
   }
+  // A reference keyframe culled by local mapping hands over to its spanning-tree parent.
+  while (reference_->bad() && reference_->parent()) reference_ = reference_->parent();
   if (!frame_poses_.empty()) {
     const FramePose& fp = frame_poses_.back();
     if (fp.reference && !fp.reference->bad()) {
