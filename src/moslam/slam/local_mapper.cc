@@ -12,8 +12,33 @@
 #include "moslam/slam/fuse.h"
 #include "moslam/slam/keyframe_culling.h"
 #include "moslam/slam/new_points.h"
+#include "moslam/util/check.h"
 
 namespace moslam::slam {
+
+void AnchorGauge(const std::vector<std::shared_ptr<map::KeyFrame>>& poses, size_t num_local,
+                 std::vector<bool>* pose_fixed) {
+  MOSLAM_CHECK(num_local <= poses.size() && pose_fixed->size() == poses.size());
+  if (num_local == 0 ||
+      std::find(pose_fixed->begin(), pose_fixed->end(), true) != pose_fixed->end()) {
+    return;
+  }
+  size_t oldest = 0;
+  for (size_t i = 1; i < num_local; ++i) {
+    if (poses[i]->id < poses[oldest]->id) oldest = i;
+  }
+  (*pose_fixed)[oldest] = true;
+}
+
+namespace {
+
+// Stereo depth bf / (u - u_right) beyond `close_depth` (ORB-SLAM2's "far" keypoint).
+bool IsFar(const optim::Observation& observation, double bf, double close_depth) {
+  const double disparity = observation.pixel.x() - observation.u_right;
+  return disparity <= 0.0 || bf / disparity > close_depth;
+}
+
+}  // namespace
 
 LocalMapper::LocalMapper(map::Map* map, const camera::PinholeCamera& camera, double bf,
                          const LocalMapperOptions& options)
@@ -122,6 +147,7 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
       poses.push_back(kf);
       problem.pose_fixed.push_back(kf->id == 0);
     }
+    const size_t num_local = local.size();
     std::set<uint64_t> point_ids;
     for (const auto& kf : local) {
       for (const auto& p : kf->points) {
@@ -142,6 +168,7 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
       }
     }
     if (points.empty()) return;
+    AnchorGauge(poses, num_local, &problem.pose_fixed);
     problem.camera = model_;
     for (const auto& kf : poses) problem.T_cam_world.push_back(kf->T_cam_world());
     for (const auto& p : points) problem.points_world.push_back(p->position);
@@ -154,6 +181,10 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
       edge.observation.pixel = Eigen::Vector2d(kp.pt.x, kp.pt.y);
       edge.observation.u_right = f.u_right[e.index];
       edge.observation.inv_sigma2 = f.inv_level_sigma2[kp.octave];
+      if (options_.far_stereo_as_monocular && edge.observation.is_stereo() &&
+          IsFar(edge.observation, model_.bf, options_.close_depth)) {
+        edge.observation.u_right = -1.0;
+      }
       problem.edges.push_back(edge);
     }
   }
@@ -163,11 +194,14 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
 
   int outliers = 0;
   for (size_t k = 0; k < edges.size(); ++k) outliers += result.edge_inlier[k] ? 0 : 1;
+  const double inliers = std::max<size_t>(1, edges.size() - outliers);
   spdlog::debug(
-      "local BA kf {}: {} poses ({} fixed), {} points, {} edges, {} outliers, cost {} -> {}",
+      "local BA kf {}: {} poses ({} fixed), {} points, {} edges, {} outliers, cost {} -> {} "
+      "(mean chi2 per inlier edge {:.3f} -> {:.3f})",
       keyframe->id, poses.size(),
       std::count(problem.pose_fixed.begin(), problem.pose_fixed.end(), true), points.size(),
-      edges.size(), outliers, result.initial_cost, result.final_cost);
+      edges.size(), outliers, result.initial_cost, result.final_cost,
+      2.0 * result.initial_cost / inliers, 2.0 * result.final_cost / inliers);
 
   std::lock_guard<std::mutex> lock(map_->mutex());
   for (size_t k = 0; k < edges.size(); ++k) {

@@ -23,11 +23,28 @@
 namespace moslam::slam {
 
 struct LocalMapperOptions {
-  double close_depth = 0.0;  // metres (settings.CloseDepthMetres()), for keyframe culling
+  // Metres (settings.CloseDepthMetres()): keyframe culling, and far_stereo_as_monocular.
+  double close_depth = 0.0;
+  // Local bundle adjustment after each keyframe (default on, as ORB-SLAM2); off only to measure
+  // what it contributes (slam_eval --no-local-ba).
   bool local_bundle_adjustment = true;
+  // Bundle adjustment uses only [u, v] of stereo/RGB-D observations whose stereo depth is beyond
+  // close_depth (default off: ORB-SLAM2 keeps the u_right row of every stereo observation). The
+  // "far" keypoints of ORB-SLAM2's paper (Mur-Artal & Tardós 2017, Sec. III-A) carry little
+  // scale information and a sub-pixel disparity bias of the SAD/parabola matcher is a large depth
+  // bias there. An experiment switch (slam_eval --ba-far-monocular) until it is measured on more
+  // than one stereo sequence.
+  bool far_stereo_as_monocular = false;
   bool keyframe_culling = true;
   int num_threads = 1;  // Ceres threads in bundle adjustment
 };
+
+// Stereo/RGB-D bundle adjustment is defined up to a rigid motion of everything (gauge freedom);
+// ORB-SLAM2 anchors it with keyframe 0 and the fixed non-local keyframes. When `pose_fixed` has
+// none (keyframe 0 culled or not local, every observer of the local points local), fixes the
+// oldest of the first `num_local` poses (the local keyframes) so the window cannot drift freely.
+void AnchorGauge(const std::vector<std::shared_ptr<map::KeyFrame>>& poses, size_t num_local,
+                 std::vector<bool>* pose_fixed);
 
 class LocalMapper {
  public:

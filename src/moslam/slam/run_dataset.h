@@ -7,6 +7,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -49,15 +50,18 @@ inline double ThreadCpuMs() {
 
 // `max_frames` <= 0: all frames. `mask_folder`: when set, each frame's movable-object mask is
 // read from the image path with its "rgb" (or "image_0") folder replaced by this one (the
-// layout of `moslam synth`: rgb/<stamp>.png -> moving/<stamp>.png).
+// layout of `moslam synth`: rgb/<stamp>.png -> moving/<stamp>.png). `adjust` (may be empty) edits
+// the SystemOptions before the run (experiments: local BA off, ...).
 inline DatasetRun RunDataset(const std::string& folder, const std::string& settings_path,
                              bool deterministic, int max_frames = 0,
-                             const std::string& mask_folder = "") {
+                             const std::string& mask_folder = "",
+                             const std::function<void(SystemOptions*)>& adjust = {}) {
   const io::Sequence sequence = io::ReadDataset(folder);
   SystemOptions options;
   options.sensor = sequence.sensor;
   options.settings = io::LoadOrbSlamSettings(settings_path, sequence.sensor);
   options.deterministic = deterministic;
+  if (adjust) adjust(&options);
   DatasetRun run;
   std::vector<double> total_ms, cpu_ms;
   {

@@ -92,6 +92,8 @@ class System::Impl : public KeyFrameSink {
   static LocalMapperOptions MapperOptions(const SystemOptions& o) {
     LocalMapperOptions m;
     m.close_depth = o.settings.CloseDepthMetres();
+    m.local_bundle_adjustment = o.local_bundle_adjustment;
+    m.far_stereo_as_monocular = o.ba_far_stereo_as_monocular;
     return m;
   }
   static TrackerOptions TrackerOpts(const SystemOptions& o) {

@@ -29,7 +29,12 @@ struct SystemOptions {
   // Mapping synchronously after each keyframe, fixed seeds, one thread everywhere.
   bool deterministic = false;
   int keyframe_queue_capacity = 8;  // bounded queue tracking -> local mapping (keyframes)
-  void Check() const;               // InputError naming the field
+  // Local bundle adjustment after each keyframe (LocalMapperOptions::local_bundle_adjustment);
+  // off only for experiments that measure what it contributes.
+  bool local_bundle_adjustment = true;
+  // LocalMapperOptions::far_stereo_as_monocular (default off, as ORB-SLAM2).
+  bool ba_far_stereo_as_monocular = false;
+  void Check() const;  // InputError naming the field
 };
 
 // One frame as the tracker takes it. Images are already loaded (io::LoadFrameImages).
