@@ -243,8 +243,8 @@ TEST(Synth, StaticPresetIsWalkingXyzWithoutPeople) {
   EXPECT_EQ(s.mean_moving_fraction, 0.0);
   GenerateSequence(Small("w_xyz", b.path(), 3));
   // Same room and camera path as w_xyz: identical ground truth.
-  EXPECT_EQ(ReadAll(fs::path(a.path()) / "groundtruth.txt"),
-            ReadAll(fs::path(b.path()) / "groundtruth.txt"));
+  EXPECT_EQ(DataLines(fs::path(a.path()) / "groundtruth.txt"),
+            DataLines(fs::path(b.path()) / "groundtruth.txt"));
 }
 
 TEST(Synth, SeatedPresetPeopleMoveALittle) {
