@@ -32,7 +32,7 @@ TEST(SystemSynthetic, RgbdWithMovingMasksTracksEveryFrameAndBeatsUnmasked) {
 
   // Without masks the walkers, who cross close in front of the camera and cover up to half of the
   // view, pull the tracker along (what breaks ORB-SLAM2 on TUM's walking sequences): the error
-  // grows to decimetres, far above the masked run's. Measured on seeds 1-4 (docs/SYNTH.md).
+  // grows to 4-30 cm, far above the masked run's. Measured on seeds 1-4 (docs/SYNTH.md).
   const DatasetRun unmasked =
       RunDataset(dir.path(), dir.path() + "/settings.yaml", /*deterministic=*/true, 0, "");
   ASSERT_EQ(unmasked.reports.size(), 60u);
