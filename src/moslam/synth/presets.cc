@@ -230,10 +230,11 @@ void BuildOffice(Builder& b, bool walking, bool seated) {
     }
   }
   if (walking) {
-    // Two people walking loops that cross in front of the camera at 0.9-1.5 m (covering 20-60 %
-    // of the view there) and come back 2-3 m away in front of the desks, in opposite directions.
-    // The loops are narrow (2.2-2.6 m) so that the walkers stay in view most of the time.
-    const double near = -1.0 + rng.Uniform(-0.15, 0.15);
+    // Two people walking loops that cross in front of the camera at 0.8-1.2 m (covering 20-60 %
+    // of the view there), both in the same direction (+x) so that their motion is coherent, and
+    // come back 2-3 m away in front of the desks. The loops are narrow (2.2-2.6 m) so that the
+    // walkers stay in view most of the time.
+    const double near = -1.25 + rng.Uniform(-0.1, 0.1);
     std::vector<Vector2d> a = {{-1.3, near}, {1.3, near + 0.2}, {1.3, 0.4}, {-1.3, 0.4}};
     std::vector<Vector2d> c = {{1.1, -0.2}, {-1.1, -0.3}, {-1.1, -1.4}, {1.1, -1.3}};
     b.AddPerson(Person::Walking(b.Look(), a, rng.Uniform(0.8, 1.1), rng.Uniform(0, 5)));
@@ -358,6 +359,8 @@ const std::vector<PresetInfo>& Presets() {
        false, 707, 30.0},
       {"kitti_cars", "street with moving and parked cars, stereo car driving at ~8 m/s", true, 400,
        10.0},
+      {"static_xyz", "w_xyz's room and camera path without people (static-scene reference)", false,
+       859, 30.0},
   };
   return kPresets;
 }
@@ -399,7 +402,11 @@ SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet
                         int width, int height) {
   SequenceSpec spec;
   spec.info = FindPreset(name);
-  Rng rng(seed, kStreamScene + static_cast<uint64_t>(&FindPreset(name) - Presets().data()));
+  // static_xyz is w_xyz with the people taken out afterwards: the same random stream gives the same
+  // room and camera path, so the two differ only by the moving people.
+  const bool static_scene = name == "static_xyz";
+  const std::string scene_name = static_scene ? "w_xyz" : name;
+  Rng rng(seed, kStreamScene + static_cast<uint64_t>(&FindPreset(scene_name) - Presets().data()));
   Builder b(&spec.world, &rng, &textures);
   if (spec.info.stereo) {
     spec.camera = KittiCamera(width > 0 ? width : 1226, height > 0 ? height : 370);
@@ -416,8 +423,9 @@ SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet
     return spec;
   }
   spec.camera = TumCamera(width > 0 ? width : 640, height > 0 ? height : 480);
-  BuildOffice(b, name != "s_static", name == "s_static");
-  spec.T_world_cam = IndoorTrajectory(name, rng);
+  BuildOffice(b, scene_name != "s_static", scene_name == "s_static");
+  spec.T_world_cam = IndoorTrajectory(scene_name, rng);
+  if (static_scene) spec.world.actors.clear();
   return spec;
 }
 

@@ -236,6 +236,17 @@ TEST(Synth, WalkingPresetPeopleCoverALargePartOfTheView) {
   EXPECT_GT(s.frames_over_10, 0.3);
 }
 
+TEST(Synth, StaticPresetIsWalkingXyzWithoutPeople) {
+  testing::TempDir a, b;
+  const GenerateStats s = GenerateSequence(Small("static_xyz", a.path(), 3));
+  EXPECT_EQ(s.mean_person_fraction, 0.0);
+  EXPECT_EQ(s.mean_moving_fraction, 0.0);
+  GenerateSequence(Small("w_xyz", b.path(), 3));
+  // Same room and camera path as w_xyz: identical ground truth.
+  EXPECT_EQ(DataLines(fs::path(a.path()) / "groundtruth.txt"),
+            DataLines(fs::path(b.path()) / "groundtruth.txt"));
+}
+
 TEST(Synth, SeatedPresetPeopleMoveALittle) {
   testing::TempDir dir;
   GeneratorOptions o = Small("s_static", dir.path(), 3);

@@ -235,9 +235,12 @@ cv::Mat MakeProceduralTexture(TextureKind kind, uint64_t seed, int size) {
   Rng rng(seed, static_cast<uint64_t>(kind) + 1);
   switch (kind) {
     case TextureKind::kWall:
-      return rng.Uniform() < 0.4 ? Bricks(rng, size)
-                                 : Mottled(rng, size, RandomColour(rng, 0.5f, 0.95f),
-                                           RandomColour(rng, 0.3f, 0.8f), 4, 2.5f);
+      // Painted office walls: faint plaster mottle, rarely brick. A feature-rich wall everywhere
+      // would give an unmasked tracker so many static points that people never dominate the
+      // view, unlike TUM's fr3 office, where the people carry much of the texture.
+      return rng.Uniform() < 0.15 ? Bricks(rng, size)
+                                  : Mottled(rng, size, RandomColour(rng, 0.6f, 0.95f),
+                                            RandomColour(rng, 0.5f, 0.85f), 4, 1.2f);
     case TextureKind::kFloor:
       return rng.Uniform() < 0.5 ? Wood(rng, size)
                                  : Mottled(rng, size, RandomColour(rng, 0.2f, 0.6f),
@@ -325,7 +328,9 @@ void TextureSet::AddPhotos(const std::string& folder, int size, int stride, int 
     cv::hconcat(half, flipped_x, top);
     cv::hconcat(flipped_y, flipped_xy, bottom);
     cv::vconcat(top, bottom, tile);
-    const TextureKind kinds[] = {TextureKind::kPoster, TextureKind::kFacade, TextureKind::kWall,
+    // Not walls: office walls are painted (procedural, moderate texture); photographs appear as
+    // posters, facades, floors and clothing.
+    const TextureKind kinds[] = {TextureKind::kPoster, TextureKind::kFacade, TextureKind::kClothing,
                                  TextureKind::kFloor, TextureKind::kClothing};
     const TextureKind use = kinds[added % 5];
     const bool once = use == TextureKind::kPoster || use == TextureKind::kFacade;
