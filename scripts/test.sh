@@ -14,4 +14,7 @@ case "$kind" in
 esac
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+# Suppressions for reports inside system libraries (each file says which and why).
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan_suppressions.txt}"
+export TSAN_OPTIONS="${TSAN_OPTIONS:-suppressions=$PWD/scripts/tsan_suppressions.txt}"
 ctest --test-dir "$dir" --output-on-failure -j "${MOSLAM_JOBS:-$(nproc)}"
