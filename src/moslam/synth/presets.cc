@@ -374,28 +374,30 @@ const PresetInfo& FindPreset(const std::string& name) {
   ThrowInput("unknown preset '{}' (known: {})", name, known);
 }
 
-camera::PinholeOptions TumCamera(int width, int height) {
-  const double s = width / 640.0, sy = height / 480.0;
+namespace {
+// The intrinsics of a w0 x h0 camera resampled to width x height: focal lengths scale with the
+// image, and the principal point is scaled about pixel corners (OpenCV's pixel centres at
+// integers), so the same ray hits the same place in the resized image.
+camera::PinholeOptions ScaledCamera(double fx, double fy, double cx, double cy, int w0, int h0,
+                                    int width, int height) {
+  const double s = static_cast<double>(width) / w0, sy = static_cast<double>(height) / h0;
   camera::PinholeOptions c;
-  c.fx = 535.4 * s;
-  c.fy = 539.2 * sy;
-  c.cx = (320.1 + 0.5) * s - 0.5;
-  c.cy = (247.6 + 0.5) * sy - 0.5;
+  c.fx = fx * s;
+  c.fy = fy * sy;
+  c.cx = (cx + 0.5) * s - 0.5;
+  c.cy = (cy + 0.5) * sy - 0.5;
   c.width = width;
   c.height = height;
   return c;
 }
+}  // namespace
+
+camera::PinholeOptions TumCamera(int width, int height) {
+  return ScaledCamera(535.4, 539.2, 320.1, 247.6, 640, 480, width, height);
+}
 
 camera::PinholeOptions KittiCamera(int width, int height) {
-  const double s = width / 1226.0, sy = height / 370.0;
-  camera::PinholeOptions c;
-  c.fx = 707.0912 * s;
-  c.fy = 707.0912 * sy;
-  c.cx = (601.8873 + 0.5) * s - 0.5;
-  c.cy = (183.1104 + 0.5) * sy - 0.5;
-  c.width = width;
-  c.height = height;
-  return c;
+  return ScaledCamera(707.0912, 707.0912, 601.8873, 183.1104, 1226, 370, width, height);
 }
 
 SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet& textures,
