@@ -109,9 +109,14 @@ nlohmann::json StatisticsToJson(const ErrorStatistics& stats) {
           {"max", stats.max}};
 }
 
-nlohmann::json AteToJson(const AteResult& result, const Trajectory& gt, const Trajectory& est) {
-  const AteOptions& o = result.options;
-  return {{"metric", "ate"},
+namespace {
+// The fields ATE and RPE reports share: convention, association, inputs, alignment and the error
+// statistics (nlohmann::json keeps keys sorted, so field order is the same either way).
+template <typename Result>
+nlohmann::json ErrorReportJson(const char* metric, const Result& result, const Trajectory& gt,
+                               const Trajectory& est) {
+  const auto& o = result.options;
+  return {{"metric", metric},
           {"convention", ConventionName(o.convention)},
           {"max_dt", o.max_dt},
           {"offset", o.offset},
@@ -122,22 +127,18 @@ nlohmann::json AteToJson(const AteResult& result, const Trajectory& gt, const Tr
           {"translation_m", StatisticsToJson(result.translation.stats)},
           {"rotation_deg", StatisticsToJson(result.rotation.stats)}};
 }
+}  // namespace
+
+nlohmann::json AteToJson(const AteResult& result, const Trajectory& gt, const Trajectory& est) {
+  return ErrorReportJson("ate", result, gt, est);
+}
 
 nlohmann::json RpeToJson(const RpeResult& result, const Trajectory& gt, const Trajectory& est) {
-  const RpeOptions& o = result.options;
-  return {{"metric", "rpe"},
-          {"convention", ConventionName(o.convention)},
-          {"delta", o.delta},
-          {"delta_unit", DeltaUnitName(o.delta_unit)},
-          {"all_pairs", o.all_pairs},
-          {"max_dt", o.max_dt},
-          {"offset", o.offset},
-          {"ground_truth", InputJson(gt)},
-          {"estimate", InputJson(est)},
-          {"alignment", AlignmentJson(o.alignment, result.alignment)},
-          {"compared_pose_pairs", result.translation.stats.count},
-          {"translation_m", StatisticsToJson(result.translation.stats)},
-          {"rotation_deg", StatisticsToJson(result.rotation.stats)}};
+  nlohmann::json json = ErrorReportJson("rpe", result, gt, est);
+  json["delta"] = result.options.delta;
+  json["delta_unit"] = DeltaUnitName(result.options.delta_unit);
+  json["all_pairs"] = result.options.all_pairs;
+  return json;
 }
 
 TrajectoryPlotData MakeAtePlotData(const AteResult& result, const Trajectory& est, bool rotation) {
