@@ -15,6 +15,7 @@
 
 #include "moslam/feature/frame.h"
 #include "moslam/geometry/se3.h"
+#include "moslam/vocab/bow.h"
 
 namespace moslam::map {
 
@@ -31,6 +32,12 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   geometry::SE3 T_world_cam() const { return T_cam_world_.Inverse(); }
   Eigen::Vector3d CameraCenter() const { return T_world_cam_.translation(); }
   void SetPose(const geometry::SE3& T_cam_world);
+
+  // Bag of words of frame.descriptors and its direct index (vocab/bow.h), set once by whoever
+  // holds the vocabulary (local mapping, on insertion) before the keyframe enters the keyframe
+  // database; empty when the system runs without a vocabulary.
+  vocab::BowVector bow;
+  vocab::FeatureVector bow_features;
 
   // Per keypoint, nullptr when unmatched.
   std::vector<std::shared_ptr<MapPoint>> points;
