@@ -155,6 +155,22 @@ bool YamlFile::Read<std::vector<double>>(const std::string& key, std::vector<dou
   return true;
 }
 
+template <>
+bool YamlFile::Read<std::vector<std::string>>(const std::string& key,
+                                              std::vector<std::string>* value) {
+  const auto it = impl_->leaves.find(key);
+  if (it == impl_->leaves.end()) return false;
+  read_.insert(key);
+  const cv::FileNode& node = it->second;
+  if (!node.isSeq()) WrongType(path_, key, "a list of strings");
+  value->clear();
+  for (auto e = node.begin(); e != node.end(); ++e) {
+    if (!(*e).isString()) WrongType(path_, key, "a list of strings");
+    value->push_back((*e).string());
+  }
+  return true;
+}
+
 template <typename T>
 T YamlFile::Required(const std::string& key) {
   T value{};
@@ -168,6 +184,7 @@ template int YamlFile::Required<int>(const std::string&);
 template bool YamlFile::Required<bool>(const std::string&);
 template std::string YamlFile::Required<std::string>(const std::string&);
 template std::vector<double> YamlFile::Required<std::vector<double>>(const std::string&);
+template std::vector<std::string> YamlFile::Required<std::vector<std::string>>(const std::string&);
 
 void YamlFile::IgnorePrefix(const std::string& prefix) { ignored_prefixes_.push_back(prefix); }
 

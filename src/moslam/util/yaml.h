@@ -36,7 +36,7 @@ class YamlFile {
 
   // Sets *value when the key is present (and marks it read); throws InputError naming the key
   // and the file when the value has the wrong type. Supported: double, float, int, bool,
-  // std::string, std::vector<double>.
+  // std::string, std::vector<double>, std::vector<std::string>.
   template <typename T>
   bool Read(const std::string& key, T* value);
   // Like Read, but a missing key is an InputError.
@@ -69,5 +69,8 @@ template <>
 bool YamlFile::Read<std::string>(const std::string& key, std::string* value);
 template <>
 bool YamlFile::Read<std::vector<double>>(const std::string& key, std::vector<double>* value);
+template <>
+bool YamlFile::Read<std::vector<std::string>>(const std::string& key,
+                                              std::vector<std::string>* value);
 
 }  // namespace moslam

@@ -34,6 +34,16 @@ TEST(YamlFile, ReadsFlatOpenCvStyleAndNestedKeys) {
   EXPECT_NO_THROW(file.RejectUnread());
 }
 
+TEST(YamlFile, ReadsListsOfStrings) {
+  testing::TempDir dir;
+  YamlFile file(dir.Write("s.yaml", "%YAML:1.0\nnames: [person, \"car\"]\nnumbers: [1, 2]\n"));
+  EXPECT_EQ(file.Required<std::vector<std::string>>("names"),
+            (std::vector<std::string>{"person", "car"}));
+  std::vector<std::string> wrong;
+  EXPECT_THAT(ErrorOf([&] { file.Read("numbers", &wrong); }),
+              AllOf(HasSubstr("numbers"), HasSubstr("a list of strings")));
+}
+
 TEST(YamlFile, IntegerKeyReadAsDoubleAndOptionalKeepsDefault) {
   testing::TempDir dir;
   YamlFile file(dir.Write("s.yaml", "%YAML:1.0\na: 3\n"));

@@ -1,0 +1,112 @@
+// From per-class scores to the binary movable-object mask tracking uses: the post-processing
+// shared by every network-based mask provider (mask_provider.h).
+//
+//   1. the class probabilities are resized to a working resolution (the image's aspect ratio,
+//      longest side `working_side`);
+//   2. test-time suppression: a class whose highest probability anywhere in the image is below
+//      `suppress_below` is taken to be absent and its probability moved to the others
+//      (renormalized); weak, scattered responses of a class that is not in the picture are the
+//      most common false positives of a segmentation network on another domain;
+//   3. optionally the fully connected CRF (dense_crf.h) with the colour kernel (c), the depth
+//      kernel (d) or both (cd), the paper's (Sun et al. 2019) three refinements;
+//   4. the movable pixels (argmax is a movable class) are upsampled to the image's size
+//      (bilinear on the 0/255 mask, thresholded at half, so edges are not blocky) and optionally
+//      dilated.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "moslam/semantic/dense_crf.h"
+
+namespace moslam {
+class YamlFile;
+}
+
+namespace moslam::semantic {
+
+// Which pairwise kernels the CRF uses besides smoothness; kNone skips the CRF.
+enum class CrfMode { kNone, kColour, kDepth, kColourDepth };
+const char* ToString(CrfMode mode);  // "none", "c", "d", "cd"
+// "none", "c", "d", "cd" (also "c,d"); nullopt otherwise.
+std::optional<CrfMode> ParseCrfMode(const std::string& text);
+
+struct RefineOptions {
+  CrfMode crf = CrfMode::kNone;
+  // Longest side, in pixels, of the working resolution at which classes are compared and the CRF
+  // runs (the image's aspect ratio is kept; never larger than the image). 0 = the image's size.
+  // 320 because the CRF's cost grows with the pixels (anchors: 93 ms at 480x360 against 155 ms
+  // at 640x480, two labels) while the mask only has to cover objects, not their fine edges.
+  int working_side = 320;
+  // Classes whose maximum probability over the image is below this are suppressed (0 = off).
+  // The background class (ModelCard::background) is never suppressed.
+  float suppress_below = 0.0f;
+  // Run the CRF on two labels, static and movable (class probabilities summed), rather than on
+  // every class: tracking only uses the mask, and the CRF's cost grows with the labels (anchors:
+  // 93 ms for 2 labels against 192 ms for 21 at 480x360).
+  bool crf_binary = true;
+  int dilate_px = 0;            // grow the final mask by this many pixels (elliptic), >= 0
+  DenseCrfOptions crf_options;  // its appearance/depth switches are set from `crf`
+  // InputError naming the field.
+  void Check() const;
+};
+
+// Reads `prefix`working_side, suppress_below, crf_binary, dilate_px and the CRF's options under
+// "crf." (dense_crf.h); absent keys keep their values.
+void ReadRefineOptions(YamlFile& file, const std::string& prefix, RefineOptions* options);
+
+// The working resolution for an image of `image_size` (see RefineOptions::working_side).
+cv::Size WorkingSize(const cv::Size& image_size, int working_side);
+
+// Planar {L, H, W} CV_32F helpers. Each plane resized to `size` with `interpolation`.
+cv::Mat ResizePlanar(const cv::Mat& planar, const cv::Size& size, int interpolation);
+// Softmax over the label axis, in place (numerically stable: the per-pixel maximum is removed).
+void SoftmaxPlanar(cv::Mat* planar);
+// Argmax over the label axis: H x W CV_8U (lowest label on ties).
+cv::Mat ArgMaxPlanar(const cv::Mat& planar);
+// The maximum of each plane.
+std::vector<float> PlaneMaxima(const cv::Mat& planar);
+
+// What refinement made of one frame.
+struct RefineResult {
+  cv::Mat probabilities;  // {L, h, w} at the working size, after suppression (after the CRF too
+                          // when the CRF ran on every class)
+  cv::Mat labels;         // h x w CV_8U argmax of `probabilities`
+  cv::Mat mask;           // image size CV_8UC1, 255 = movable
+  std::vector<float> image_scores;  // per class: its maximum probability over the image
+  std::vector<int> suppressed;      // classes suppressed in this frame
+  double crf_ms = 0.0;              // time spent in the CRF (with its resizing)
+};
+
+class MaskRefiner {
+ public:
+  // `movable`: one flag per class; `background`: the class never suppressed (-1: none).
+  // InputError for bad options.
+  MaskRefiner(const RefineOptions& options, std::vector<bool> movable, int background);
+  ~MaskRefiner();
+  MaskRefiner(const MaskRefiner&) = delete;
+  MaskRefiner& operator=(const MaskRefiner&) = delete;
+
+  const RefineOptions& options() const { return options_; }
+
+  // probabilities: {L, h, w} CV_32F, summing to 1 per pixel, at the working size (WorkingSize of
+  // the image). image: 8UC1/8UC3/8UC4 of the frame; depth_m: CV_32F metres of the frame's size,
+  // required by the depth kernel. InputError when the sizes or the class count disagree.
+  RefineResult Refine(cv::Mat probabilities, const cv::Mat& image, const cv::Mat& depth_m);
+
+ private:
+  // The 0/255 movable mask at the working size; with the CRF on every class, *probabilities
+  // becomes its marginals.
+  cv::Mat MovableAtWorkingSize(cv::Mat* probabilities, const cv::Mat& labels, const cv::Mat& image,
+                               const cv::Mat& depth_m, double* crf_ms);
+  RefineOptions options_;
+  std::vector<bool> movable_;
+  int background_;
+  std::unique_ptr<DenseCrf> crf_;  // only when options_.crf != kNone
+};
+
+}  // namespace moslam::semantic

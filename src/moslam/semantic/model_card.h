@@ -1,0 +1,75 @@
+// A model card: a small YAML file (OpenCV's dialect: the first line is %YAML:1.0) that says how to
+// run a network with OpenCV dnn and what its outputs mean, so that any ONNX segmentation model or
+// Darknet/ONNX detector can serve masks without code changes. Every key (an unknown one is an error
+// naming it and the card):
+//
+//   type: segmentation          # segmentation (per-pixel class scores) | detector (boxes)
+//   name: deeplabv3_mnv2_voc    # for logs and summaries (default: the card's file stem)
+//   model: models/x/x.onnx      # ONNX file, or Darknet .weights; relative paths are tried
+//                               # against the card's folder, then MOSLAM_SHARED (../shared)
+//   config: models/x/x.cfg      # Darknet .cfg (detectors only; omit for ONNX)
+//   input_width: 513            # network input, pixels (the image is resized to it)
+//   input_height: 513
+//   mean: [127.5, 127.5, 127.5] # subtracted per channel, in the network's channel order
+//   scale: 0.00784313725        # multiplied after the mean: (x - mean) * scale
+//   rgb: true                   # the network wants RGB (images are read as BGR)
+//   classes: [background, ...]  # the network's classes in output order
+//   movable: [person, car]      # classes whose pixels (or boxes) are movable objects
+//   background: background      # segmentation: the class never suppressed (optional)
+//   confidence: 0.25            # detector: minimum box confidence
+//   nms: 0.45                   # detector: non-maximum suppression IoU
+//   box_probability: 0.9        # detector: probability given to a box's class inside the box
+//   refine: {working_side: 320, suppress_below: 0.0, crf_binary: true, dilate_px: 0}
+//   crf: {...}                  # DenseCrfOptions fields (dense_crf.h)
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "moslam/semantic/mask_refine.h"
+
+namespace moslam::semantic {
+
+enum class ModelKind { kSegmentation, kDetector };
+const char* ToString(ModelKind kind);  // "segmentation", "detector"
+
+struct ModelCard {
+  std::string path;  // the card file
+  std::string name;
+  ModelKind kind = ModelKind::kSegmentation;
+  std::string model;   // resolved path of the weights
+  std::string config;  // resolved path of a Darknet .cfg; empty otherwise
+  int input_width = 0;
+  int input_height = 0;
+  std::vector<double> mean = {0.0, 0.0, 0.0};
+  double scale = 1.0;
+  bool rgb = true;
+  std::vector<std::string> classes;
+  std::vector<std::string> movable;
+  std::string background;
+  float confidence = 0.25f;
+  float nms = 0.45f;
+  float box_probability = 0.9f;
+  RefineOptions refine;
+
+  // InputError naming the card and the key of the first bad value (e.g. a movable class that is
+  // not among the classes).
+  void Check() const;
+  // One flag per class: is it in `movable`.
+  std::vector<bool> MovableFlags() const;
+  // Index of `background` in `classes`, -1 when not set.
+  int BackgroundIndex() const;
+};
+
+// MOSLAM_SHARED if set, else "../shared" (relative to the working directory).
+std::string SharedRoot();
+
+// Reads and checks a card; relative `model`/`config` paths are resolved against the card's
+// folder, then `shared_root`; a file found in neither is an InputError naming the key, the card
+// and both places tried.
+ModelCard LoadModelCard(const std::string& path, const std::string& shared_root = SharedRoot());
+
+// Replaces the movable classes (e.g. from --movable); InputError naming an unknown class.
+void SetMovable(const std::vector<std::string>& names, ModelCard* card);
+
+}  // namespace moslam::semantic

@@ -1,0 +1,109 @@
+#include "moslam/semantic/model_card.h"
+
+#include <filesystem>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "moslam/testing/error_of.h"
+#include "moslam/testing/shared_data.h"
+
+namespace moslam::semantic {
+namespace {
+
+using ::moslam::testing::ErrorOf;
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+constexpr const char* kCard =
+    "%YAML:1.0\n"
+    "type: segmentation\n"
+    "model: net.onnx\n"
+    "input_width: 64\n"
+    "input_height: 48\n"
+    "mean: [127.5, 127.5, 127.5]\n"
+    "scale: 0.5\n"
+    "rgb: false\n"
+    "classes: [background, person, car, tree]\n"
+    "movable: [person, car]\n"
+    "background: background\n"
+    "refine:\n"
+    "  working_side: 100\n"
+    "  suppress_below: 0.3\n"
+    "crf:\n"
+    "  iterations: 3\n";
+
+TEST(ModelCard, ReadsEveryKeyAndResolvesTheModelBesideTheCard) {
+  testing::TempDir dir;
+  dir.Write("net.onnx", "not a network");
+  const ModelCard card = LoadModelCard(dir.Write("card.yaml", kCard), "/nonexistent");
+  EXPECT_EQ(card.name, "card");
+  EXPECT_EQ(card.kind, ModelKind::kSegmentation);
+  EXPECT_EQ(std::filesystem::path(card.model).filename(), "net.onnx");
+  EXPECT_EQ(card.input_width, 64);
+  EXPECT_EQ(card.input_height, 48);
+  EXPECT_DOUBLE_EQ(card.scale, 0.5);
+  EXPECT_FALSE(card.rgb);
+  EXPECT_EQ(card.MovableFlags(), (std::vector<bool>{false, true, true, false}));
+  EXPECT_EQ(card.BackgroundIndex(), 0);
+  EXPECT_EQ(card.refine.working_side, 100);
+  EXPECT_FLOAT_EQ(card.refine.suppress_below, 0.3f);
+  EXPECT_EQ(card.refine.crf_options.iterations, 3);
+}
+
+TEST(ModelCard, ModelFallsBackToTheSharedRoot) {
+  testing::TempDir cards;
+  testing::TempDir shared;
+  std::filesystem::create_directories(shared.path() + "/models");
+  shared.Write("models/net.onnx", "x");
+  std::string text = kCard;
+  text.replace(text.find("net.onnx"), 8, "models/net.onnx");
+  const ModelCard card = LoadModelCard(cards.Write("card.yaml", text), shared.path());
+  EXPECT_EQ(card.model, shared.path() + "/models/net.onnx");
+}
+
+TEST(ModelCard, ErrorsNameTheKeyAndTheCard) {
+  testing::TempDir dir;
+  dir.Write("net.onnx", "x");
+  auto load = [&](const std::string& text) {
+    return ErrorOf([&] { LoadModelCard(dir.Write("bad.yaml", text), "/nonexistent"); });
+  };
+  EXPECT_THAT(load(std::string(kCard) + "colour_order: rgb\n"),
+              AllOf(HasSubstr("colour_order"), HasSubstr("bad.yaml")));
+  std::string unknown_movable = kCard;
+  unknown_movable.replace(unknown_movable.find("[person, car]"), 13, "[person, bus]");
+  EXPECT_THAT(load(unknown_movable), AllOf(HasSubstr("movable"), HasSubstr("'bus'")));
+  std::string missing_model = kCard;
+  missing_model.replace(missing_model.find("net.onnx"), 8, "gone.onnx");
+  EXPECT_THAT(load(missing_model), AllOf(HasSubstr("model"), HasSubstr("gone.onnx")));
+  std::string bad_type = kCard;
+  bad_type.replace(bad_type.find("segmentation"), 12, "classifier");
+  EXPECT_THAT(load(bad_type), HasSubstr("type"));
+  EXPECT_THAT(load(std::string(kCard) + "nms: 2\n"), HasSubstr("nms"));
+}
+
+TEST(ModelCard, SetMovableReplacesTheMovableClasses) {
+  testing::TempDir dir;
+  dir.Write("net.onnx", "x");
+  ModelCard card = LoadModelCard(dir.Write("card.yaml", kCard), "/nonexistent");
+  SetMovable({"car"}, &card);
+  EXPECT_EQ(card.MovableFlags(), (std::vector<bool>{false, false, true, false}));
+  EXPECT_THAT(ErrorOf([&] { SetMovable({"boat"}, &card); }),
+              AllOf(HasSubstr("--movable"), HasSubstr("boat")));
+}
+
+// The cards shipped in configs/models/ parse and name models that exist in the shared folder.
+TEST(ModelCard, ShippedCardsLoad) {
+  MOSLAM_SHARED_OR_SKIP(models, "models");
+  const std::string root = ::moslam::testing::SharedRoot();
+  const ModelCard deeplab = LoadModelCard("configs/models/deeplabv3_mnv2_voc.yaml", root);
+  EXPECT_EQ(deeplab.classes.size(), 21u);
+  EXPECT_EQ(deeplab.MovableFlags()[15], true);  // VOC 15 = person
+  const ModelCard yolo = LoadModelCard("configs/models/yolo_fastest_coco.yaml", root);
+  EXPECT_EQ(yolo.kind, ModelKind::kDetector);
+  EXPECT_EQ(yolo.classes.size(), 80u);
+  EXPECT_FALSE(yolo.config.empty());
+}
+
+}  // namespace
+}  // namespace moslam::semantic
