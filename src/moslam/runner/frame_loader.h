@@ -23,10 +23,13 @@
 namespace moslam::runner {
 
 struct LoadedFrame {
-  int index = 0;  // FrameEntry::index
+  int index = 0;                          // FrameEntry::index
+  const io::FrameEntry* entry = nullptr;  // the sequence's entry (it outlives the run)
   slam::FrameInput input;
   double load_ms = 0.0;        // reading and decoding the images
-  double mask_ms = 0.0;        // reading (and dilating) the mask
+  double mask_ms = 0.0;        // computing or reading the mask (all of it)
+  double network_ms = 0.0;     // of mask_ms: the network (pre-processing and inference)
+  double crf_ms = 0.0;         // of mask_ms: the CRF
   double mask_fraction = 0.0;  // share of movable pixels, 0 when there is no mask
 };
 
@@ -44,6 +47,9 @@ class FrameLoader {
 
   // The next frame; nullopt at the end. Rethrows the loader's exception once it is reached.
   std::optional<LoadedFrame> Next();
+  // Explicit stop from the consumer's side: closes the queue (the loader stops at its next push,
+  // a pending Next() returns the frames already loaded and then nullopt). The destructor joins.
+  void Stop() { queue_.Close(); }
 
  private:
   void Run(const io::Sequence& sequence, size_t first, size_t last);

@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "moslam/runner/model_mask_source.h"
 #include "moslam/util/error.h"
 #include "moslam/util/strings.h"
 #include "moslam/util/text_file.h"
@@ -25,6 +26,10 @@ const char* ToString(MaskSourceKind kind) {
       return "files";
     case MaskSourceKind::kSynthGt:
       return "synth-gt";
+    case MaskSourceKind::kOnnx:
+      return "onnx";
+    case MaskSourceKind::kDetector:
+      return "detector";
   }
   return "?";
 }
@@ -34,6 +39,8 @@ std::optional<MaskSourceKind> ParseMaskSourceKind(const std::string& name) {
   if (lower == "none") return MaskSourceKind::kNone;
   if (lower == "files") return MaskSourceKind::kFiles;
   if (lower == "synth-gt") return MaskSourceKind::kSynthGt;
+  if (lower == "onnx") return MaskSourceKind::kOnnx;
+  if (lower == "detector") return MaskSourceKind::kDetector;
   return std::nullopt;
 }
 
@@ -41,8 +48,19 @@ void MaskOptions::Check() const {
   if (kind == MaskSourceKind::kFiles && folder.empty()) {
     ThrowInput("--mask-source files: give the folder of mask PNGs (--mask-source files DIR)");
   }
-  if (kind != MaskSourceKind::kSynthGt && !movable.empty()) {
-    ThrowInput("--movable: applies to --mask-source synth-gt only");
+  const bool model = kind == MaskSourceKind::kOnnx || kind == MaskSourceKind::kDetector;
+  if (kind != MaskSourceKind::kSynthGt && !model && !movable.empty()) {
+    ThrowInput("--movable: applies to --mask-source synth-gt, onnx and detector only");
+  }
+  if (model && model_card.empty()) {
+    ThrowInput("--mask-source {}: give the model card (--model-card configs/models/<name>.yaml)",
+               ToString(kind));
+  }
+  if (!model && !model_card.empty()) {
+    ThrowInput("--model-card: applies to --mask-source onnx and detector only");
+  }
+  if (!model && crf && *crf != semantic::CrfMode::kNone) {
+    ThrowInput("--crf: applies to --mask-source onnx and detector only");
   }
   if (dilate_px < 0) ThrowInput("--mask-dilate: must be >= 0 pixels, got {}", dilate_px);
 }
@@ -214,6 +232,9 @@ std::unique_ptr<MaskSource> MakeMaskSource(const MaskOptions& options,
       return std::make_unique<MaskFiles>(options);
     case MaskSourceKind::kSynthGt:
       return std::make_unique<SynthGroundTruth>(options, sequence);
+    case MaskSourceKind::kOnnx:
+    case MaskSourceKind::kDetector:
+      return MakeModelMaskSource(options);
     case MaskSourceKind::kNone:
       break;
   }

@@ -2,6 +2,9 @@
 // size, non-zero = movable; it reaches the ORB extractor through slam::FrameInput::mask):
 //
 //   none      no mask.
+//   onnx      an ONNX semantic-segmentation network, described by a model card
+//   detector  an object detector's boxes (Darknet or ONNX), described by a model card
+//             (both: semantic/mask_provider.h, refined per RefineOptions, --crf none|c|d|cd)
 //   files     a folder of mask PNGs named like the frames' images: frame image .../rgb/<stem>.png
 //             (or any extension) takes DIR/<stem>.png. A missing file is an InputError naming
 //             it, unless `missing_empty` (then the frame has no mask).
@@ -11,7 +14,8 @@
 //             0|1>`. The mask is the pixels whose class is movable: the classes named in `movable`,
 //             or, when that is empty, those marked 1 in classes.txt.
 //
-// Masks are read in the image-loading thread; MaskFor is const and safe to call from any thread.
+// Masks are computed in the segmentation stage's thread (segmentation_stage.h), one frame at a
+// time, through Segment(). The file-based sources' MaskFor is const and safe from any thread.
 #pragma once
 
 #include <memory>
@@ -22,20 +26,25 @@
 #include <opencv2/core.hpp>
 
 #include "moslam/io/sequence.h"
+#include "moslam/semantic/mask_refine.h"
 
 namespace moslam::runner {
 
-enum class MaskSourceKind { kNone, kFiles, kSynthGt };
+enum class MaskSourceKind { kNone, kFiles, kSynthGt, kOnnx, kDetector };
 
-const char* ToString(MaskSourceKind kind);  // "none", "files", "synth-gt"
+const char* ToString(MaskSourceKind kind);  // "none", "files", "synth-gt", "onnx", "detector"
 std::optional<MaskSourceKind> ParseMaskSourceKind(const std::string& name);
 
 struct MaskOptions {
   MaskSourceKind kind = MaskSourceKind::kNone;
   std::string folder;          // files: the folder of mask PNGs (required there)
   bool missing_empty = false;  // files: a missing mask file means "no mask" instead of an error
-  // synth-gt: class names that are movable; empty = the ones classes.txt marks movable.
+  // synth-gt, onnx, detector: class names that are movable; empty = the ones classes.txt (or the
+  // model card) marks movable.
   std::vector<std::string> movable;
+  std::string model_card;  // onnx, detector: the card's path (required there)
+  // onnx, detector: CRF kernels; nullopt = the card's refine settings (no CRF unless set there).
+  std::optional<semantic::CrfMode> crf;
   int dilate_px = 0;  // grow every mask by this many pixels (elliptic element), >= 0
   // InputError naming the command-line option of the first bad value.
   void Check() const;
@@ -52,9 +61,11 @@ struct ClassInfo {
 std::vector<ClassInfo> ReadClasses(const std::string& path);
 
 struct FrameMask {
-  cv::Mat mask;           // CV_8UC1, 0 / 255; empty: no mask for this frame
-  double fraction = 0.0;  // share of movable pixels after dilation, 0..1
-  std::string path;       // the file it came from; empty when none
+  cv::Mat mask;             // CV_8UC1, 0 / 255; empty: no mask for this frame
+  double fraction = 0.0;    // share of movable pixels after dilation, 0..1
+  std::string path;         // the file it came from; empty when none
+  double network_ms = 0.0;  // model sources: pre-processing and inference
+  double crf_ms = 0.0;      // model sources: the CRF
 };
 
 class MaskSource {
@@ -63,12 +74,21 @@ class MaskSource {
   // The mask of `frame`, whose left image has `image_size`. InputError naming the file when it
   // is missing (unless allowed), unreadable, not 8-bit single-channel, or of another size.
   virtual FrameMask MaskFor(const io::FrameEntry& frame, const cv::Size& image_size) const = 0;
+  // The mask of a loaded frame (image: its left image as tracking gets it; depth: CV_32F metres
+  // or empty). The file-based sources read MaskFor(frame, image.size()); the model sources run
+  // their network. Called by one thread at a time.
+  virtual FrameMask Segment(const io::FrameEntry& frame, const cv::Mat& image,
+                            const cv::Mat& depth) {
+    (void)depth;
+    return MaskFor(frame, image.size());
+  }
   // For logs and summary.json, e.g. "synth-gt (movable: person, car)".
   virtual std::string Describe() const = 0;
 };
 
-// Checks `options` and, for synth-gt, reads classes.txt (InputError when absent,
-// or when a name in `movable` is not one of its classes).
+// Checks `options` and, for synth-gt, reads classes.txt (InputError when absent, or when a name
+// in `movable` is not one of its classes); for onnx and detector, loads the model card and the
+// network (InputError naming the card or the model file).
 std::unique_ptr<MaskSource> MakeMaskSource(const MaskOptions& options,
                                            const io::Sequence& sequence);
 

@@ -6,8 +6,9 @@
 //                               (ORB-SLAM2's SaveTrajectoryKITTI); frames without a pose are absent
 //   KeyFrameTrajectory.txt      TUM, keyframes; SaveKeyFrameTrajectoryTUM precision (6 / 7)
 //   frames.csv                  one row per frame, kFramesCsvHeader's columns
-//   summary.json                counts, per-stage time statistics, settings, data set, mask source,
-//                               and the ATE when the data set has ground truth
+//   summary.json                counts, per-stage time statistics, the per-frame breakdown
+//                               (segmentation, CRF, extraction, tracking, mapping), settings, data
+//                               set, mask source, and the ATE when the data set has ground truth
 //   trajectory.png              ground truth against the aligned estimate (with ground truth only)
 #pragma once
 
@@ -27,7 +28,7 @@ namespace moslam::runner {
 
 inline constexpr const char* kFramesCsvHeader =
     "index,timestamp,state,reason,features,matches,inliers,keyframe,extract_ms,track_ms,"
-    "local_map_ms,keyframe_ms,total_ms,mask_ms,mask_fraction";
+    "local_map_ms,keyframe_ms,total_ms,mask_ms,mask_fraction,seg_ms,crf_ms";
 
 // Writers; InputError naming the file when it cannot be written.
 void WriteOrbSlamTum(const eval::Trajectory& trajectory, int pose_decimals,

@@ -6,6 +6,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "moslam/runner/segmentation_stage.h"
+#include "moslam/util/check.h"
 #include "moslam/util/error.h"
 #include "moslam/util/progress.h"
 #include "moslam/util/strings.h"
@@ -61,26 +63,38 @@ void RunOptions::Check() const {
   if (!(depth_factor > 0.0)) ThrowInput("run.depth_factor: must be > 0, got {}", depth_factor);
 }
 
-LoadedFrame LoadFrame(const io::FrameEntry& frame, const MaskSource& masks,
-                      const RunOptions& options) {
+LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options) {
   LoadedFrame loaded;
   loaded.index = frame.index;
+  loaded.entry = &frame;
   const auto start = Clock::now();
   io::FrameImages images = io::LoadFrameImages(frame, options.colour, options.depth_factor);
   loaded.load_ms = MsSince(start);
-  const auto mask_start = Clock::now();
-  FrameMask mask = masks.MaskFor(frame, images.left.size());
-  loaded.mask_ms = MsSince(mask_start);
-  loaded.mask_fraction = mask.fraction;
   loaded.input.timestamp = frame.timestamp;
   loaded.input.image = std::move(images.left);
   loaded.input.right = std::move(images.right);
   loaded.input.depth = std::move(images.depth);
-  loaded.input.mask = std::move(mask.mask);
   return loaded;
 }
 
-RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, const MaskSource& masks,
+void SegmentFrame(MaskSource& masks, LoadedFrame* frame) {
+  MOSLAM_CHECK(frame->entry != nullptr) << "a loaded frame without its sequence entry";
+  const auto start = Clock::now();
+  FrameMask mask = masks.Segment(*frame->entry, frame->input.image, frame->input.depth);
+  frame->mask_ms = MsSince(start);
+  frame->network_ms = mask.network_ms;
+  frame->crf_ms = mask.crf_ms;
+  frame->mask_fraction = mask.fraction;
+  frame->input.mask = std::move(mask.mask);
+}
+
+LoadedFrame LoadFrame(const io::FrameEntry& frame, MaskSource& masks, const RunOptions& options) {
+  LoadedFrame loaded = LoadImages(frame, options);
+  SegmentFrame(masks, &loaded);
+  return loaded;
+}
+
+RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource& masks,
                       const RunOptions& options) {
   options.Check();
   RunResult result;
@@ -96,13 +110,17 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, const Mask
   std::optional<Progress> progress;
   if (options.progress) progress.emplace("tracking", count, 2.0, "frames");
   {
-    // Destroyed before Finish(): stops and joins the loader also when Track() or loading threw.
+    // Destroyed before Finish(), stage first: stops and joins both threads also when Track(),
+    // segmentation or loading threw.
     FrameLoader loader(
         sequence, result.first, result.last,
-        [&masks, &options](const io::FrameEntry& f) { return LoadFrame(f, masks, options); },
+        [&options](const io::FrameEntry& f) { return LoadImages(f, options); },
         options.queue_capacity);
+    SegmentationStage stage([&loader] { return loader.Next(); }, [&loader] { loader.Stop(); },
+                            [&masks](LoadedFrame& f) { SegmentFrame(masks, &f); },
+                            options.queue_capacity);
     const double first_stamp = sequence.frames[result.first].timestamp;
-    while (std::optional<LoadedFrame> frame = loader.Next()) {
+    while (std::optional<LoadedFrame> frame = stage.Next()) {
       if (options.realtime) {
         // Pacing is the one legitimate sleep: a frame is not given to the tracker before its
         // time on the data set's clock, counted from the first frame.
@@ -115,6 +133,8 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, const Mask
       record.index = frame->index;
       record.timestamp = frame->input.timestamp;
       record.mask_ms = frame->mask_ms;
+      record.network_ms = frame->network_ms;
+      record.crf_ms = frame->crf_ms;
       record.mask_fraction = frame->mask_fraction;
       record.report = tracker.Track(frame->input);
       spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,

@@ -1,5 +1,6 @@
 // The loop of `moslam run` as a library function: frames of a sequence, loaded ahead in their own
-// thread (frame_loader.h), go through a Tracker one at a time; each frame's report and timings
+// thread (frame_loader.h) and given their movable-object masks in another (segmentation_stage.h),
+// go through a Tracker one at a time; each frame's report and timings
 // are recorded; at the end the tracker is finished and its trajectories collected. Writing the
 // outputs is outputs.h's job.
 #pragma once
@@ -31,7 +32,8 @@ struct RunOptions {
   FrameRange frames;          // sub-range to run; checked against the sequence in RunSequence
   bool realtime = false;      // pace frames by their timestamps instead of running flat out
   bool progress = true;       // periodic progress line (frames/s, ETA) via util/progress.h
-  size_t queue_capacity = 4;  // frames loaded ahead of tracking (> 0)
+  size_t queue_capacity = 4;  // frames loaded ahead of segmentation, and segmented ahead of
+                              // tracking (> 0; each of the two queues holds this many)
   io::ColourMode colour = io::ColourMode::kGrey;  // how the left image is loaded
   double depth_factor = io::kTumDepthFactor;      // raw depth units per metre (RGB-D)
   void Check() const;                             // InputError naming the field
@@ -42,7 +44,9 @@ struct FrameRecord {
   int index = 0;
   double timestamp = 0.0;
   slam::FrameReport report;
-  double mask_ms = 0.0;
+  double mask_ms = 0.0;     // the whole mask: reading, or network + CRF + post-processing
+  double network_ms = 0.0;  // of mask_ms: the network
+  double crf_ms = 0.0;      // of mask_ms: the CRF
   double mask_fraction = 0.0;
 };
 
@@ -56,13 +60,17 @@ struct RunResult {
   double wall_s = 0.0;  // from the start of loading to the end of Finish
 };
 
-// Loads one frame the way RunSequence does: images per `options`, then the mask.
-LoadedFrame LoadFrame(const io::FrameEntry& frame, const MaskSource& masks,
-                      const RunOptions& options);
+// The images of one frame per `options` (the loader thread's part).
+LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options);
+// Sets frame->input.mask and the mask timings from `masks` (the segmentation thread's part).
+void SegmentFrame(MaskSource& masks, LoadedFrame* frame);
+// Both, in the caller's thread.
+LoadedFrame LoadFrame(const io::FrameEntry& frame, MaskSource& masks, const RunOptions& options);
 
-// Runs sequence.frames[range] through `tracker`. Loading errors (InputError naming the file)
-// are rethrown here after the loader thread has stopped.
-RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, const MaskSource& masks,
+// Runs sequence.frames[range] through `tracker`. Loading and mask errors (InputError naming the
+// file, or a network's error) are rethrown here after the loader and segmentation threads have
+// stopped.
+RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource& masks,
                       const RunOptions& options);
 
 }  // namespace moslam::runner

@@ -85,7 +85,7 @@ TEST(RunLoopTest, TumRunWritesEveryOutputInItsFormat) {
   const auto csv = Lines((dir / "frames.csv").string());
   ASSERT_EQ(csv.size(), 7u);
   EXPECT_EQ(csv[0], kFramesCsvHeader);
-  EXPECT_EQ(SplitFields(csv[0], true).size(), 15u);
+  EXPECT_EQ(SplitFields(csv[0], true).size(), 17u);
   EXPECT_THAT(csv[1], ::testing::StartsWith("0," + test::Stamp(0) + ",ok,,100,80,60,1,1.000,"));
   EXPECT_THAT(csv[4], HasSubstr(",lost,\"too few matches, said the fake\",103,"));
   // Summary with the ATE against groundtruth.txt: the fake reports the true poses.
@@ -98,6 +98,10 @@ TEST(RunLoopTest, TumRunWritesEveryOutputInItsFormat) {
   EXPECT_EQ(summary["map_points"], 21);
   EXPECT_DOUBLE_EQ(summary["times_ms"]["extract_ms"]["median"].get<double>(), 3.5);
   EXPECT_DOUBLE_EQ(summary["times_ms"]["extract_ms"]["p90"].get<double>(), 5.5);
+  // The per-frame breakdown: extraction 1 + i ms for i = 0..5 (median 3.5), no segmentation.
+  EXPECT_DOUBLE_EQ(summary["breakdown_median_ms"]["extraction"].get<double>(), 3.5);
+  EXPECT_DOUBLE_EQ(summary["breakdown_median_ms"]["segmentation"].get<double>(), 0.0);
+  EXPECT_TRUE(summary["breakdown_median_ms"].contains("mapping_per_frame"));
   EXPECT_EQ(summary["mask_source"], "none");
   ASSERT_TRUE(summary["ate"].is_object()) << summary.dump(2);
   EXPECT_EQ(summary["ate"]["translation_m"]["count"], 5);

@@ -1,0 +1,62 @@
+#include "moslam/runner/model_mask_source.h"
+
+#include <fmt/format.h>
+
+#include "moslam/semantic/model_card.h"
+#include "moslam/util/check.h"
+#include "moslam/util/error.h"
+
+namespace moslam::runner {
+namespace {
+
+class ProviderMaskSource : public MaskSource {
+ public:
+  explicit ProviderMaskSource(std::unique_ptr<semantic::MaskProvider> provider)
+      : provider_(std::move(provider)) {
+    MOSLAM_CHECK(provider_ != nullptr);
+  }
+  FrameMask MaskFor(const io::FrameEntry& frame, const cv::Size&) const override {
+    ThrowInput("frame {}: a network mask source needs the frame's image (Segment, not MaskFor)",
+               frame.index);
+  }
+  FrameMask Segment(const io::FrameEntry&, const cv::Mat& image, const cv::Mat& depth) override {
+    semantic::MaskResult result = provider_->Segment({image, depth});
+    FrameMask mask;
+    mask.fraction = static_cast<double>(cv::countNonZero(result.mask)) /
+                    static_cast<double>(result.mask.total());
+    mask.mask = std::move(result.mask);
+    mask.network_ms = result.network_ms;
+    mask.crf_ms = result.crf_ms;
+    return mask;
+  }
+  std::string Describe() const override { return provider_->Describe(); }
+
+ private:
+  std::unique_ptr<semantic::MaskProvider> provider_;
+};
+
+}  // namespace
+
+std::unique_ptr<MaskSource> MakeProviderMaskSource(
+    std::unique_ptr<semantic::MaskProvider> provider) {
+  return std::make_unique<ProviderMaskSource>(std::move(provider));
+}
+
+std::unique_ptr<MaskSource> MakeModelMaskSource(const MaskOptions& options) {
+  semantic::ModelCard card = semantic::LoadModelCard(options.model_card);
+  const semantic::ModelKind wanted = options.kind == MaskSourceKind::kDetector
+                                         ? semantic::ModelKind::kDetector
+                                         : semantic::ModelKind::kSegmentation;
+  if (card.kind != wanted) {
+    ThrowInFile(card.path, fmt::format("type: is {}, but --mask-source {} needs a {} card",
+                                       semantic::ToString(card.kind), ToString(options.kind),
+                                       semantic::ToString(wanted)));
+  }
+  if (!options.movable.empty()) semantic::SetMovable(options.movable, &card);
+  semantic::RefineOptions refine = card.refine;
+  if (options.crf) refine.crf = *options.crf;
+  if (options.dilate_px > 0) refine.dilate_px = options.dilate_px;
+  return MakeProviderMaskSource(semantic::MakeMaskProvider(card, refine));
+}
+
+}  // namespace moslam::runner

@@ -1,0 +1,207 @@
+// The segmentation stage between image loading and tracking: order, each frame with its own
+// mask, overlap of segmentation and tracking, clean stops at the end of a sequence, on a provider
+// failure and on an early stop by the consumer. No timing thresholds: overlap is shown by events.
+#include "moslam/runner/segmentation_stage.h"
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <stdexcept>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "moslam/io/dataset.h"
+#include "moslam/runner/model_mask_source.h"
+#include "moslam/runner/run_loop.h"
+#include "moslam/runner/test_sequences.h"
+#include "moslam/testing/error_of.h"
+
+namespace moslam::runner {
+namespace {
+
+using ::moslam::testing::ErrorOf;
+using ::testing::HasSubstr;
+
+io::Sequence FakeSequence(int frames) {
+  io::Sequence sequence;
+  for (int i = 0; i < frames; ++i) sequence.frames.push_back({i, 0.1 * i, "", "", ""});
+  return sequence;
+}
+
+// A frame whose image is filled with its index (mod 256), without touching files.
+LoadedFrame MakeFrame(const io::FrameEntry& entry) {
+  LoadedFrame frame;
+  frame.index = entry.index;
+  frame.entry = &entry;
+  frame.input.image = cv::Mat(4, 6, CV_8UC1, cv::Scalar(entry.index % 256));
+  return frame;
+}
+
+// Marks the mask with the image's value: a frame carrying another frame's mask is detectable.
+void MaskFromImage(LoadedFrame& frame) { frame.input.mask = frame.input.image.clone(); }
+
+TEST(SegmentationStage, EndOfSequenceDrainsInOrderWithEachFrameItsOwnMask) {
+  const io::Sequence sequence = FakeSequence(200);
+  FrameLoader loader(sequence, 0, sequence.size(), MakeFrame, 1);
+  SegmentationStage stage([&] { return loader.Next(); }, [&] { loader.Stop(); }, MaskFromImage, 1);
+  int expected = 0;
+  while (std::optional<LoadedFrame> frame = stage.Next()) {
+    ASSERT_EQ(frame->index, expected);
+    ASSERT_EQ(frame->input.mask.at<uint8_t>(0, 0), expected % 256);
+    ++expected;
+  }
+  EXPECT_EQ(expected, 200);
+  EXPECT_FALSE(stage.Next());  // stays at the end
+}
+
+TEST(SegmentationStage, ProviderFailureStopsTheRunWithItsErrorAfterEarlierFrames) {
+  const io::Sequence sequence = FakeSequence(1000);
+  FrameLoader loader(sequence, 0, sequence.size(), MakeFrame, 2);
+  std::atomic<bool> upstream_stopped{false};
+  SegmentationStage stage([&] { return loader.Next(); },
+                          [&] {
+                            upstream_stopped = true;
+                            loader.Stop();
+                          },
+                          [](LoadedFrame& f) {
+                            if (f.index == 3) throw std::runtime_error("network exploded");
+                            MaskFromImage(f);
+                          },
+                          2);
+  for (int i = 0; i < 3; ++i) {
+    const std::optional<LoadedFrame> frame = stage.Next();
+    ASSERT_TRUE(frame);
+    EXPECT_EQ(frame->index, i);
+  }
+  EXPECT_THROW(
+      {
+        try {
+          stage.Next();
+        } catch (const std::runtime_error& e) {
+          EXPECT_STREQ(e.what(), "network exploded");
+          throw;
+        }
+      },
+      std::runtime_error);
+  EXPECT_TRUE(upstream_stopped);  // the loader was told to stop, not left to load 1000 frames
+}
+
+TEST(SegmentationStage, UpstreamFailureReachesTheConsumer) {
+  const io::Sequence sequence = FakeSequence(10);
+  FrameLoader loader(
+      sequence, 0, sequence.size(),
+      [](const io::FrameEntry& e) {
+        if (e.index == 5) ThrowInput("image {} is missing", e.index);
+        return MakeFrame(e);
+      },
+      4);
+  SegmentationStage stage([&] { return loader.Next(); }, [&] { loader.Stop(); }, MaskFromImage, 4);
+  int frames = 0;
+  const std::string error = ErrorOf([&] {
+    while (stage.Next()) ++frames;
+  });
+  EXPECT_EQ(frames, 5);
+  EXPECT_THAT(error, HasSubstr("image 5 is missing"));
+}
+
+TEST(SegmentationStage, EarlyStopWithFullQueuesDoesNotDeadlock) {
+  const io::Sequence sequence = FakeSequence(100000);
+  FrameLoader loader(sequence, 0, sequence.size(), MakeFrame, 1);
+  SegmentationStage stage([&] { return loader.Next(); }, [&] { loader.Stop(); }, MaskFromImage, 1);
+  ASSERT_TRUE(stage.Next());
+  stage.Stop();  // both threads are (or will be) blocked on full queues: Stop must free them
+  stage.Stop();  // idempotent
+  int left = 0;
+  while (stage.Next()) ++left;  // at most what was queued before the stop
+  EXPECT_LE(left, 1);
+}
+
+TEST(SegmentationStage, NextFrameIsSegmentedWhileTheCurrentOneIsTracked) {
+  const io::Sequence sequence = FakeSequence(3);
+  FrameLoader loader(sequence, 0, sequence.size(), MakeFrame, 4);
+  std::mutex mutex;
+  std::condition_variable segmented;
+  int last_segmented = -1;
+  SegmentationStage stage([&] { return loader.Next(); }, [&] { loader.Stop(); },
+                          [&](LoadedFrame& f) {
+                            MaskFromImage(f);
+                            std::lock_guard<std::mutex> lock(mutex);
+                            last_segmented = f.index;
+                            segmented.notify_all();
+                          },
+                          4);
+  const std::optional<LoadedFrame> first = stage.Next();
+  ASSERT_TRUE(first);
+  // "Tracking" frame 0 waits for the stage to finish frame 1 on its own: this can only happen
+  // when segmentation runs concurrently. The bound only guards against a hang if it does not.
+  std::unique_lock<std::mutex> lock(mutex);
+  EXPECT_TRUE(
+      segmented.wait_for(lock, std::chrono::minutes(1), [&] { return last_segmented >= 1; }));
+}
+
+// A mask source over a fake provider: Segment() is what the run loop calls, with the frame's
+// image; the network and CRF times reach the frame records.
+class FakeProvider : public semantic::MaskProvider {
+ public:
+  explicit FakeProvider(int fail_at) : fail_at_(fail_at) {}
+  semantic::MaskResult Segment(const semantic::MaskInput& input) override {
+    if (calls_++ == fail_at_) ThrowInput("fake network: out of memory");
+    semantic::MaskResult result;
+    result.mask = cv::Mat(input.image.size(), CV_8UC1, cv::Scalar(0));
+    // Movable where the image is brighter than 42 (TUM test frames are 40 + i).
+    result.mask.setTo(255, input.image > 42);
+    result.network_ms = 7.0;
+    result.crf_ms = 3.0;
+    return result;
+  }
+  const std::vector<std::string>& class_names() const override { return names_; }
+  const std::vector<bool>& movable() const override { return movable_; }
+  std::string Describe() const override { return "fake"; }
+
+ private:
+  int fail_at_;
+  int calls_ = 0;
+  std::vector<std::string> names_ = {"static", "thing"};
+  std::vector<bool> movable_ = {false, true};
+};
+
+RunOptions Quiet() {
+  RunOptions options;
+  options.progress = false;
+  options.queue_capacity = 1;
+  return options;
+}
+
+TEST(SegmentationStage, RunSequenceGivesEachFrameTheMaskOfItsOwnImage) {
+  testing::TempDir data;
+  test::MakeTum(data, 6);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  test::FakeTracker tracker;
+  const auto masks = MakeProviderMaskSource(std::make_unique<FakeProvider>(-1));
+  const RunResult result = RunSequence(seq, tracker, *masks, Quiet());
+  ASSERT_EQ(tracker.masks.size(), 6u);
+  for (size_t i = 0; i < 6; ++i) {
+    const bool movable = tracker.images[i].at<uint8_t>(0, 0) > 42;
+    EXPECT_EQ(cv::countNonZero(tracker.masks[i]), movable ? test::kCols * test::kRows : 0) << i;
+    EXPECT_EQ(result.frames[i].network_ms, 7.0);
+    EXPECT_EQ(result.frames[i].crf_ms, 3.0);
+    EXPECT_GE(result.frames[i].mask_ms, 0.0);
+  }
+  EXPECT_TRUE(tracker.finished);
+}
+
+TEST(SegmentationStage, RunSequenceStopsCleanlyWhenTheProviderFails) {
+  testing::TempDir data;
+  test::MakeTum(data, 40);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  test::FakeTracker tracker;
+  const auto masks = MakeProviderMaskSource(std::make_unique<FakeProvider>(2));
+  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, Quiet()); }),
+              HasSubstr("out of memory"));
+  EXPECT_EQ(tracker.masks.size(), 2u);  // frames 0 and 1 were tracked, nothing after the error
+}
+
+}  // namespace
+}  // namespace moslam::runner
