@@ -15,6 +15,7 @@
 #include "moslam/runner/outputs.h"
 #include "moslam/runner/run_loop.h"
 #include "moslam/runner/tracker.h"
+#include "moslam/semantic/mask_refine.h"
 #include "moslam/util/error.h"
 #if MOSLAM_HAVE_SLAM
 #include "moslam/slam/system.h"
@@ -26,7 +27,9 @@ namespace {
 struct RunArgs {
   std::vector<std::string> dataset;  // FORMAT PATH
   std::string settings;
-  std::vector<std::string> mask_source = {"none"};  // none | files DIR | synth-gt
+  std::vector<std::string> mask_source = {"none"};  // none | files DIR | synth-gt | onnx | detector
+  std::string model_card;
+  std::string crf;  // empty: the card's setting
   std::string mask_missing = "error";
   std::vector<std::string> movable;
   int mask_dilate = 0;
@@ -78,7 +81,7 @@ runner::MaskOptions MakeMaskOptions(const RunArgs& args) {
   runner::MaskOptions options;
   const auto kind = runner::ParseMaskSourceKind(args.mask_source.at(0));
   if (!kind) {
-    ThrowInput("--mask-source: unknown source '{}' (none, files DIR, synth-gt)",
+    ThrowInput("--mask-source: unknown source '{}' (none, files DIR, synth-gt, onnx, detector)",
                args.mask_source[0]);
   }
   options.kind = *kind;
@@ -91,6 +94,11 @@ runner::MaskOptions MakeMaskOptions(const RunArgs& args) {
   options.missing_empty = args.mask_missing == "empty";
   options.movable = args.movable;
   options.dilate_px = args.mask_dilate;
+  options.model_card = args.model_card;
+  if (!args.crf.empty()) {
+    options.crf = semantic::ParseCrfMode(args.crf);
+    if (!options.crf) ThrowInput("--crf: '{}' is none of none, c, d, cd", args.crf);
+  }
   return options;
 }
 
@@ -168,9 +176,19 @@ void AddRunCommand(CLI::App& app) {
   command
       ->add_option("--mask-source", args->mask_source,
                    "Movable-object masks: none, files DIR (DIR/<image stem>.png), synth-gt (the "
-                   "synthetic generator's class/<stem>.png with classes.txt)")
+                   "synthetic generator's class/<stem>.png with classes.txt), onnx (a "
+                   "segmentation network) or detector (box masks), the last two with --model-card; "
+                   "computed in a thread of their own, one frame ahead of tracking")
       ->expected(1, 2)
       ->default_str("none");
+  command->add_option("--model-card", args->model_card,
+                      "onnx, detector: the model card (configs/models/*.yaml); model files are "
+                      "found beside it or under MOSLAM_SHARED");
+  command
+      ->add_option("--crf", args->crf,
+                   "onnx, detector: refine with the CRF's colour (c), depth (d) or both (cd) "
+                   "kernels, or none (default: the card's setting, normally none)")
+      ->check(CLI::IsMember({"none", "c", "d", "cd", "c,d"}));
   command
       ->add_option("--mask-missing", args->mask_missing,
                    "files: a frame without a mask file is an error, or runs with an empty mask")
@@ -178,8 +196,8 @@ void AddRunCommand(CLI::App& app) {
       ->capture_default_str();
   command
       ->add_option("--movable", args->movable,
-                   "synth-gt: movable class names, comma-separated (default: those classes.txt "
-                   "marks movable)")
+                   "synth-gt, onnx, detector: movable class names, comma-separated (default: "
+                   "those classes.txt or the model card marks movable)")
       ->delimiter(',');
   command->add_option("--mask-dilate", args->mask_dilate, "Grow every mask by this many pixels")
       ->capture_default_str();

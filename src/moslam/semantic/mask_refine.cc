@@ -151,8 +151,25 @@ MaskRefiner::MaskRefiner(const RefineOptions& options, std::vector<bool> movable
       ThrowInput("refine.crf_binary: the CRF takes at most 32 labels, the model has {}",
                  movable_.size());
     }
-    crf_ = std::make_unique<DenseCrf>(options_.crf_options);
+    DenseCrfOptions check = options_.crf_options;  // built per image scale in ScaledCrf
+    check.Check();
   }
+}
+
+DenseCrf& MaskRefiner::ScaledCrf(double scale) {
+  if (!crf_ || crf_scale_ != scale) {
+    // The kernels' spatial sigmas are given in pixels of the full image (as for `moslam crf` and
+    // the published settings); at the working resolution the same neighbourhood is `scale` times
+    // as many pixels wide. Without this, a 320-pixel working image would smooth over a third of
+    // the picture with sxy = 80 and erase small objects.
+    DenseCrfOptions o = options_.crf_options;
+    o.smoothness_sxy = std::max(0.5f, static_cast<float>(o.smoothness_sxy * scale));
+    o.appearance_sxy = std::max(0.5f, static_cast<float>(o.appearance_sxy * scale));
+    o.depth_sxy = std::max(0.5f, static_cast<float>(o.depth_sxy * scale));
+    crf_ = std::make_unique<DenseCrf>(o);
+    crf_scale_ = scale;
+  }
+  return *crf_;
 }
 
 MaskRefiner::~MaskRefiner() = default;
@@ -194,7 +211,7 @@ RefineResult MaskRefiner::Refine(cv::Mat probabilities, const cv::Mat& image,
   result.labels = ArgMaxPlanar(probabilities);
   const cv::Mat movable_work =
       MovableAtWorkingSize(&probabilities, result.labels, image, depth_m, &result.crf_ms);
-  if (!options_.crf_binary && crf_) {
+  if (!options_.crf_binary && options_.crf != CrfMode::kNone) {
     // The CRF's marginals replaced the network's probabilities in MovableAtWorkingSize.
     result.labels = ArgMaxPlanar(probabilities);
   }
@@ -220,13 +237,14 @@ cv::Mat MaskRefiner::MovableAtWorkingSize(cv::Mat* probabilities, const cv::Mat&
   const int num = static_cast<int>(movable_.size());
   cv::Mat lut(1, 256, CV_8U, cv::Scalar(0));
   for (int l = 0; l < num; ++l) lut.at<uint8_t>(0, l) = movable_[l] ? 255 : 0;
-  if (!crf_) {
+  if (options_.crf == CrfMode::kNone) {
     cv::Mat movable;
     cv::LUT(labels, lut, movable);
     return movable;
   }
   const auto start = Clock::now();
   const cv::Size working = PlanarSize(*probabilities);
+  DenseCrf& crf_model = ScaledCrf(static_cast<double>(working.width) / image.cols);
   cv::Mat small_image;
   cv::resize(CrfImage(image), small_image, working, 0, 0, cv::INTER_AREA);
   cv::Mat small_depth;
@@ -247,11 +265,12 @@ cv::Mat MaskRefiner::MovableAtWorkingSize(cv::Mat* probabilities, const cv::Mat&
       cv::Mat target = LabelPlane(two, movable_[l] ? 1 : 0);
       target += LabelPlane(*probabilities, l);
     }
-    const CrfResult crf = crf_->Infer(small_image, small_depth, Unaries::FromProbabilities(two));
+    const CrfResult crf =
+        crf_model.Infer(small_image, small_depth, Unaries::FromProbabilities(two));
     movable = crf.labels * 255;
   } else {
     const CrfResult crf =
-        crf_->Infer(small_image, small_depth, Unaries::FromProbabilities(*probabilities));
+        crf_model.Infer(small_image, small_depth, Unaries::FromProbabilities(*probabilities));
     *probabilities = crf.marginals;
     cv::LUT(crf.labels, lut, movable);
   }

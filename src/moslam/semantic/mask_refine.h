@@ -49,8 +49,10 @@ struct RefineOptions {
   // every class: tracking only uses the mask, and the CRF's cost grows with the labels (anchors:
   // 93 ms for 2 labels against 192 ms for 21 at 480x360).
   bool crf_binary = true;
-  int dilate_px = 0;            // grow the final mask by this many pixels (elliptic), >= 0
-  DenseCrfOptions crf_options;  // its appearance/depth switches are set from `crf`
+  int dilate_px = 0;  // grow the final mask by this many pixels (elliptic), >= 0
+  // Its appearance/depth switches are set from `crf`; its spatial sigmas (sxy) are in pixels of
+  // the full image and scaled to the working resolution.
+  DenseCrfOptions crf_options;
   // InputError naming the field.
   void Check() const;
 };
@@ -106,7 +108,11 @@ class MaskRefiner {
   RefineOptions options_;
   std::vector<bool> movable_;
   int background_;
-  std::unique_ptr<DenseCrf> crf_;  // only when options_.crf != kNone
+  // The CRF with its spatial sigmas scaled to the working resolution; rebuilt when the scale
+  // changes (once per sequence in practice).
+  DenseCrf& ScaledCrf(double scale);
+  std::unique_ptr<DenseCrf> crf_;
+  double crf_scale_ = 0.0;
 };
 
 }  // namespace moslam::semantic
