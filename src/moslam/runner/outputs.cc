@@ -274,7 +274,7 @@ std::string FormatSummary(const RunResult& result, const RunDescription& d,
   const nlohmann::json b = Breakdown(result);
   text += fmt::format(
       "per frame    segmentation {:.1f} + CRF {:.1f} ms (own thread) | extraction {:.1f} + "
-      "tracking {:.1f} ms | mapping {:.1f} ms (own thread, per frame)\n",
+      "tracking {:.1f} ms | mapping {:.1f} ms (per frame; own thread unless --deterministic)\n",
       b["segmentation"].get<double>(), b["crf"].get<double>(), b["extraction"].get<double>(),
       b["tracking"].get<double>(), b["mapping_per_frame"].get<double>());
   if (ate) text += "ATE\n" + ate->text;
