@@ -132,15 +132,15 @@ cv::Mat ReadLabels(const std::string& folder, const io::FrameEntry& frame, const
   return labels;
 }
 
-cv::Mat Overlay(const cv::Mat& image, const semantic::MaskResult& r,
-                const std::vector<std::string>& names) {
+// Left: the provider's classes (argmax at the working size); right: the movable mask, with a
+// detector's boxes outlined.
+cv::Mat Overlay(const cv::Mat& image, const semantic::MaskResult& r) {
   const cv::Mat bgr = semantic::ToBgr(image);
   cv::Mat labels;
   cv::resize(r.labels, labels, bgr.size(), 0, 0, cv::INTER_NEAREST);
   cv::Mat masked = semantic::DrawMaskOverlay(bgr, r.mask, cv::Scalar(0, 0, 255));
   for (const semantic::Detection& d : r.detections) {
     cv::rectangle(masked, d.box, cv::Scalar(0, 255, 255), 1);
-    (void)names;
   }
   return semantic::SideBySide({semantic::DrawLabelOverlay(bgr, labels), masked},
                               {"classes (argmax)", "movable mask"});
@@ -190,7 +190,7 @@ void Run(const SegmentArgs& args) {
     if (!cv::imwrite(mask_path, r.mask)) ThrowInFile(mask_path, "cannot be written");
     if (args.overlay_every > 0 && i % static_cast<size_t>(args.overlay_every) == 0) {
       const std::string path = (out / "overlays" / (stem + ".png")).string();
-      if (!cv::imwrite(path, Overlay(images.left, r, provider->class_names()))) {
+      if (!cv::imwrite(path, Overlay(images.left, r))) {
         ThrowInFile(path, "cannot be written");
       }
     }

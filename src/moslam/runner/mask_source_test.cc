@@ -199,3 +199,29 @@ TEST(MaskSourceTest, OptionsAreChecked) {
 
 }  // namespace
 }  // namespace moslam::runner
+
+namespace moslam::runner {
+namespace {
+
+TEST(MaskSourceTest, NetworkSourcesCheckTheirOptionsAndTheCardsKind) {
+  const io::Sequence none;
+  MaskOptions options;
+  options.kind = MaskSourceKind::kOnnx;
+  EXPECT_THAT(ErrorOf([&] { MakeMaskSource(options, none); }), HasSubstr("--model-card"));
+  options.kind = MaskSourceKind::kNone;
+  options.crf = semantic::CrfMode::kColour;
+  EXPECT_THAT(ErrorOf([&] { MakeMaskSource(options, none); }), HasSubstr("--crf"));
+  EXPECT_EQ(ParseMaskSourceKind("onnx"), MaskSourceKind::kOnnx);
+  EXPECT_EQ(ParseMaskSourceKind("detector"), MaskSourceKind::kDetector);
+  EXPECT_STREQ(ToString(MaskSourceKind::kDetector), "detector");
+
+  MOSLAM_SHARED_OR_SKIP(model, "models/deeplabv3_mnv2_voc/deeplabv3_mnv2_voc.onnx");
+  options = MaskOptions();
+  options.kind = MaskSourceKind::kDetector;
+  options.model_card = "configs/models/deeplabv3_mnv2_voc.yaml";
+  EXPECT_THAT(ErrorOf([&] { MakeMaskSource(options, none); }),
+              ::testing::AllOf(HasSubstr("deeplabv3_mnv2_voc.yaml"), HasSubstr("detector")));
+}
+
+}  // namespace
+}  // namespace moslam::runner
