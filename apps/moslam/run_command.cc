@@ -188,7 +188,7 @@ void AddRunCommand(CLI::App& app) {
       ->add_option("--crf", args->crf,
                    "onnx, detector: refine with the CRF's colour (c), depth (d) or both (cd) "
                    "kernels, or none (default: the card's setting, normally none)")
-      ->check(CLI::IsMember({"none", "c", "d", "cd", "c,d"}));
+      ->check(CLI::IsMember({"none", "c", "d", "cd"}));
   command
       ->add_option("--mask-missing", args->mask_missing,
                    "files: a frame without a mask file is an error, or runs with an empty mask")

@@ -237,7 +237,7 @@ void AddSegmentCommand(CLI::App& app) {
   cmd->add_option("--model-card", args->model_card, "Model card (configs/models/*.yaml)")
       ->required();
   cmd->add_option("--crf", args->crf, "CRF kernels: none, c, d, cd (default: the card's)")
-      ->check(CLI::IsMember({"none", "c", "d", "cd", "c,d"}));
+      ->check(CLI::IsMember({"none", "c", "d", "cd"}));
   cmd->add_option("--movable", args->movable, "Movable class names (default: the card's)")
       ->delimiter(',');
   cmd->add_option("--mask-dilate", args->dilate, "Grow masks by this many pixels (default: card)");
