@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -262,7 +263,8 @@ void Run(const Args& args) {
   std::printf("%-34s %9s %6s %6s %6s %7s\n", "method", "positives", "R@1", "R@5", "P@R50",
               "R@P100");
   for (const std::string& vocab : args.vocabs) {
-    PrintMetrics("BoW " + vocab, s, RankBow(vocab, descriptors, s));
+    PrintMetrics("BoW " + std::filesystem::path(vocab).filename().string(), s,
+                 RankBow(vocab, descriptors, s));
   }
   PrintMetrics("tiny image (48 px, NCC)", s, RankTiny(frames, s));
   PrintChance(s);

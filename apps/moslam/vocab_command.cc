@@ -3,12 +3,14 @@
 //   moslam vocab train --images DIR [DIR ...] --out FILE [--k 10] [--levels 6]
 //                      [--max-features 1000] [--every 1] [--threads 1] [--seed 1]
 //   moslam vocab info FILE
+//   moslam vocab convert IN OUT      (e.g. ORB-SLAM2's ORBvoc.txt -> binary, ~100x faster to load)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -88,6 +90,15 @@ void RunInfo(const std::string& path) {
   fmt::print("load time  {:.1f} ms\n", load_ms);
 }
 
+void RunConvert(const std::string& in, const std::string& out) {
+  auto start = std::chrono::steady_clock::now();
+  const vocab::Vocabulary voc = vocab::Vocabulary::Load(in);
+  spdlog::info("loaded {} ({} words) in {:.2f} s", in, voc.size(), SecondsSince(start));
+  voc.Save(out);
+  spdlog::info("wrote {} ({:.1f} MB)", out,
+               static_cast<double>(std::filesystem::file_size(out)) / 1e6);
+}
+
 }  // namespace
 
 void AddVocabCommand(CLI::App& app) {
@@ -126,6 +137,17 @@ void AddVocabCommand(CLI::App& app) {
       "info", "Load a vocabulary (binary or DBoW2 text) and print its shape and load time");
   info_cmd->add_option("file", *info_path, "Vocabulary file")->required()->check(CLI::ExistingFile);
   info_cmd->callback([info_path] { RunInfo(*info_path); });
+
+  auto convert_paths = std::make_shared<std::pair<std::string, std::string>>();
+  CLI::App* convert_cmd = command->add_subcommand(
+      "convert",
+      "Convert a vocabulary (e.g. ORB-SLAM2's DBoW2 text ORBvoc.txt) to the binary format");
+  convert_cmd->add_option("in", convert_paths->first, "Vocabulary file (binary or DBoW2 text)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  convert_cmd->add_option("out", convert_paths->second, "Binary vocabulary to write")->required();
+  convert_cmd->callback(
+      [convert_paths] { RunConvert(convert_paths->first, convert_paths->second); });
 }
 
 }  // namespace moslam::app

@@ -6,8 +6,9 @@
 // names say so. Descriptors are random: a descent costs the same k distances per level whatever
 // the bits, so the Transform time does not depend on the images.
 //
-//   build/src/moslam/vocab/bench_vocab --benchmark_repetitions=5
+//   [MOSLAM_BENCH_VOCAB=FILE] build/src/moslam/vocab/bench_vocab --benchmark_repetitions=5
 //       --benchmark_report_aggregates_only=true   (one command line)
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -23,9 +24,11 @@ namespace {
 
 const std::string kShipped = std::string(MOSLAM_SOURCE_DIR) + "/data/vocab/moslam_orb.mvoc";
 
-// The file the benchmarks load: the shipped vocabulary, or a stand-in written once.
+// The file the benchmarks load: $MOSLAM_BENCH_VOCAB if set (e.g. a 1M-word vocabulary), else
+// the shipped vocabulary, else a stand-in written once.
 const std::string& VocabularyPath() {
   static const std::string path = [] {
+    if (const char* file = std::getenv("MOSLAM_BENCH_VOCAB")) return std::string(file);
     if (std::filesystem::exists(kShipped)) return kShipped;
     cv::RNG rng(1);
     std::vector<cv::Mat> images;
@@ -51,7 +54,9 @@ void BM_Load(benchmark::State& state) {
     Vocabulary voc = Vocabulary::Load(VocabularyPath());
     benchmark::DoNotOptimize(voc.size());
   }
-  state.SetLabel(VocabularyPath() == kShipped ? "shipped" : "stand-in (no shipped file)");
+  state.SetLabel(std::getenv("MOSLAM_BENCH_VOCAB") != nullptr ? "MOSLAM_BENCH_VOCAB"
+                 : VocabularyPath() == kShipped               ? "shipped"
+                                                              : "stand-in (no shipped file)");
   state.counters["words"] = static_cast<double>(Loaded().size());
 }
 BENCHMARK(BM_Load)->Unit(benchmark::kMillisecond);
