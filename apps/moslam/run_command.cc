@@ -32,6 +32,8 @@ struct RunArgs {
   int mask_dilate = 0;
   std::string out;
   std::string frames;
+  std::string skip_frames;
+  std::string vocabulary;
   double rate_hz = 0.0;
   size_t queue = 4;
   bool realtime = false;
@@ -56,18 +58,21 @@ class SystemTracker : public runner::Tracker {
 #endif
 
 std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings,
-                                             io::SensorType sensor, bool deterministic) {
+                                             io::SensorType sensor, bool deterministic,
+                                             const std::string& vocabulary) {
 #if MOSLAM_HAVE_SLAM
   slam::SystemOptions options;
   options.sensor = sensor;
   options.settings = settings;
   options.deterministic = deterministic;
+  options.vocabulary_path = vocabulary;
   options.Check();
   return std::make_unique<SystemTracker>(options);
 #else
   (void)settings;
   (void)sensor;
   (void)deterministic;
+  (void)vocabulary;
   ThrowInput(
       "this moslam was built without the SLAM core (target moslam::slam); `moslam run` "
       "needs it");
@@ -119,6 +124,9 @@ void Run(const RunArgs& args) {
       runner::MakeMaskSource(MakeMaskOptions(args), sequence);
   runner::RunOptions options;
   if (!args.frames.empty()) options.frames = runner::ParseFrameRange(args.frames);
+  if (!args.skip_frames.empty()) {
+    options.skip = runner::ParseFrameRange(args.skip_frames, "--skip-frames");
+  }
   options.realtime = args.realtime;
   options.progress = !args.quiet;
   options.queue_capacity = args.queue;
@@ -141,7 +149,7 @@ void Run(const RunArgs& args) {
                io::ToString(sequence.sensor), description.mask_source);
 
   const std::unique_ptr<runner::Tracker> tracker =
-      MakeTracker(settings, sequence.sensor, args.deterministic);
+      MakeTracker(settings, sequence.sensor, args.deterministic, args.vocabulary);
   const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
   const std::string summary = runner::WriteRunOutputs(sequence, result, description, out);
@@ -186,6 +194,14 @@ void AddRunCommand(CLI::App& app) {
   command->add_option("--out", args->out, "Output folder")->default_str("run_<sequence name>");
   command->add_option("--frames", args->frames,
                       "Sub-range A:B of frame indices (B excluded; A: and :B too)");
+  command->add_option("--skip-frames", args->skip_frames,
+                      "Frames A..B-1 are never given to the tracker (a gap in the recording, to "
+                      "exercise relocalization)");
+  command
+      ->add_option("--vocabulary", args->vocabulary,
+                   "Bag-of-words vocabulary (moslam binary .mvoc or ORB-SLAM2's ORBvoc.txt): "
+                   "enables relocalization when tracking is lost (default: none)")
+      ->check(CLI::ExistingFile);
   command->add_option(
       "--rate", args->rate_hz,
       "folder: frames per second of the images (default: the settings' Camera.fps)");

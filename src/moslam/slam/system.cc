@@ -12,6 +12,7 @@
 #include <thread>
 #include <utility>
 
+#include <spdlog/spdlog.h>
 #include <opencv2/imgproc.hpp>
 
 #include "moslam/camera/stereo_camera.h"
@@ -74,8 +75,14 @@ cv::Mat ToGrey(const cv::Mat& image, bool rgb) {
 std::shared_ptr<const vocab::Vocabulary> LoadVocabulary(const SystemOptions& options) {
   if (options.vocabulary) return options.vocabulary;
   if (options.vocabulary_path.empty()) return nullptr;
-  return std::make_shared<const vocab::Vocabulary>(
-      vocab::Vocabulary::Load(options.vocabulary_path));
+  const auto t0 = std::chrono::steady_clock::now();
+  auto vocabulary =
+      std::make_shared<const vocab::Vocabulary>(vocab::Vocabulary::Load(options.vocabulary_path));
+  spdlog::info(
+      "vocabulary {}: {} words, k {}, {} levels, loaded in {:.0f} ms", options.vocabulary_path,
+      vocabulary->size(), vocabulary->k(), vocabulary->levels(),
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  return vocabulary;
 }
 
 double MsSince(std::chrono::steady_clock::time_point t0) {
