@@ -5,7 +5,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <sstream>
 
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
@@ -65,12 +64,15 @@ class ByteReader {
 };
 
 std::string ReadWholeFile(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
+  std::ifstream file(path, std::ios::binary | std::ios::ate);
   if (!file) ThrowInFile(path, "cannot open vocabulary file");
-  std::ostringstream contents;
-  contents << file.rdbuf();
-  if (file.bad()) ThrowInFile(path, "error reading vocabulary file");
-  return std::move(contents).str();
+  const std::streamoff size = file.tellg();
+  if (size < 0) ThrowInFile(path, "cannot tell the size of the vocabulary file");
+  std::string bytes(static_cast<size_t>(size), '\0');
+  file.seekg(0);
+  // One read into a buffer of the file's size: a 1M-word binary file is ~50 MB.
+  if (!file.read(bytes.data(), size)) ThrowInFile(path, "error reading vocabulary file");
+  return bytes;
 }
 
 void CheckShape(const std::string& path, long k, long levels) {
