@@ -34,10 +34,9 @@ void KeyFrameDatabase::ComputeBow(map::KeyFrame* keyframe) const {
 
 void KeyFrameDatabase::Add(const std::shared_ptr<map::KeyFrame>& keyframe) {
   MOSLAM_CHECK(keyframe != nullptr);
-  if (keyframe->bow.empty()) {
-    MOSLAM_CHECK(keyframe->frame.descriptors.rows == 0);  // BoW not computed: a caller's bug
-    return;
-  }
+  // An empty BoW (no features, or only words of weight 0, which every training image had)
+  // shares no word with anything: nothing to index.
+  if (keyframe->bow.empty()) return;
   if (!keyframes_.emplace(keyframe->id, keyframe).second) return;
   index_.Add(keyframe->id, keyframe->bow);
 }

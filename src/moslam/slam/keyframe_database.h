@@ -56,8 +56,8 @@ class KeyFrameDatabase {
   // keyframe: hold Map::mutex()).
   void ComputeBow(map::KeyFrame* keyframe) const;
 
-  // Indexes the keyframe; its bow must be set (CHECK), unless it has no features at all (then
-  // there is nothing to index). Adding twice is a no-op.
+  // Indexes the keyframe by its bow (ComputeBow first); a keyframe with an empty bow (no
+  // features, or only zero-weight words) is not indexed. Adding twice is a no-op.
   void Add(const std::shared_ptr<map::KeyFrame>& keyframe);
   // Removes it (no-op when not indexed).
   void Erase(const map::KeyFrame& keyframe);
