@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -155,8 +156,12 @@ void PrintMetrics(const std::string& name, const Split& s, const Ranking& r) {
     }
   }
   const double n = std::max(positives, 1);
-  std::printf("%-34s %9d %6.3f %6.3f %6.3f %7.3f\n", name.c_str(), positives, r1 / n, r5 / n,
-              precision_at_half, recall_at_full);
+  // Recall 0.5 is out of reach when fewer than half of the positives are retrieved at all.
+  const std::string p_at_half = 2 * r1 >= positives && positives > 0
+                                    ? fmt::format("{:6.3f}", precision_at_half)
+                                    : std::string("   n/a");
+  std::printf("%-34s %9d %6.3f %6.3f %6s %7.3f\n", name.c_str(), positives, r1 / n, r5 / n,
+              p_at_half.c_str(), recall_at_full);
 }
 
 Ranking RankBow(const std::string& vocab_path, const std::vector<cv::Mat>& descriptors,

@@ -57,8 +57,9 @@ class Vocabulary {
   WordId Transform(const uint8_t* descriptor) const;
   // TF-IDF vector of an image (L1-normalized) and its direct index at `direct_index_level`
   // (levels counted from the root's children = 0 ... levels-1; a word shallower than that level
-  // is its own node). ORB-SLAM2 calls DBoW2 with levelsup = 4 on its 6-level tree, i.e. nodes
-  // two below the root: level 1 here, DirectIndexLevelFromLeaves(4) in general. Features whose
+  // is its own node). ORB-SLAM2 calls DBoW2 with levelsup = 4 on its 6-level tree, i.e. the
+  // k^2 = 100 nodes two below the root: level 1 here, for the shipped 5-level tree too
+  // (DirectIndexLevelFromLeaves(4) would give level 0 there: only 10 groups). Features whose
   // word has weight 0 (seen in every training image) are left out of both, as in DBoW2.
   // `descriptors`: CV_8UC1 N x 32 (N may be 0). `features` may be null.
   void Transform(const cv::Mat& descriptors, BowVector* bow, FeatureVector* features,
