@@ -9,7 +9,7 @@
 namespace moslam::slam {
 
 int DirectIndexLevel(const vocab::Vocabulary& vocabulary) {
-  return vocabulary.DirectIndexLevelFromLeaves(kDirectIndexLevelsUp);
+  return vocabulary.levels() >= 3 ? 1 : 0;
 }
 
 KeyFrameDatabase::KeyFrameDatabase(std::shared_ptr<const vocab::Vocabulary> vocabulary)

@@ -31,11 +31,12 @@
 
 namespace moslam::slam {
 
-// ORB-SLAM2 builds the direct index 4 levels above the leaves (DBoW2's `levelsup` = 4: on its
-// 6-level, k = 10 vocabulary the nodes at depth 2, ~100 of them). In vocab::Vocabulary::Transform's
-// numbering (root's children = 0) that is levels() - 5; shallower trees (test vocabularies) use
-// the root's children (0).
-inline constexpr int kDirectIndexLevelsUp = 4;
+// The direct-index level: ORB-SLAM2 calls DBoW2 with `levelsup` = 4 on its 6-level, k = 10
+// vocabulary, i.e. groups features by the k^2 = 100 nodes two below the root, level 1 in
+// vocab::Vocabulary::Transform's numbering (root's children = 0). The grouping is what decides
+// which features SearchByBoW compares, so the same level 1 is used for any tree of 3 or more
+// levels (the shipped 5-level one included, where levelsup = 4 would leave 10 groups;
+// docs/VOCABULARY.md), and level 0 for shallower test trees.
 int DirectIndexLevel(const vocab::Vocabulary& vocabulary);
 
 struct KeyFrameBow {

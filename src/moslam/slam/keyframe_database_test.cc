@@ -119,7 +119,7 @@ TEST(KeyFrameDatabase, ErasedThroughTheMapListener) {
 
 TEST(KeyFrameDatabase, ComputeBowUsesTheOrbSlam2DirectIndexLevel) {
   const auto voc = TinyVocabulary();
-  EXPECT_EQ(DirectIndexLevel(*voc), 0);  // 2 levels: shallower than 4 up, root's children
+  EXPECT_EQ(DirectIndexLevel(*voc), 0);  // 2 levels: the root's children
   KeyFrameDatabase db(voc);
   cv::RNG rng(5);
   const cv::Mat d = vocab::test::RandomDescriptors(30, rng);

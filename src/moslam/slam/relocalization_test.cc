@@ -1,6 +1,6 @@
-// Relocalization end to end on synthetic RGB-D sequences (moslam synth, exact ground truth): a gap
-// of 30 dropped frames and a kidnapped camera. The vocabulary is trained in the test on the
-// sequence's own frames (no vocabulary ships with the project yet), small (k = 10, 4 levels).
+// Relocalization end to end: a gap of 30 dropped frames (and a covered camera) on a synthetic
+// RGB-D sequence (moslam synth, exact ground truth), and a kidnapped camera on KITTI 06 (stereo).
+// The vocabulary is the shipped one (data/vocab/), trained on none of these sequences.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "moslam/eval/trajectory_io.h"
-#include "moslam/feature/orb_extractor.h"
 #include "moslam/io/dataset.h"
 #include "moslam/io/image.h"
 #include "moslam/io/orbslam_settings.h"
@@ -79,20 +78,12 @@ FrameInput Load(const TestSequence& s, size_t i) {
   return input;
 }
 
-// A small vocabulary from every `step`-th frame's ORB features (masked like the run).
-std::shared_ptr<const vocab::Vocabulary> TrainVocabulary(const TestSequence& s, size_t step) {
-  feature::OrbExtractorOptions options;
-  options.ApplySettings(s.settings.orb);
-  feature::OrbExtractor extractor(options);
-  std::vector<cv::Mat> descriptors;
-  for (size_t i = 0; i < s.sequence.size(); i += step) {
-    const FrameInput input = Load(s, i);
-    descriptors.push_back(extractor.Extract(input.image, input.mask).descriptors);
-  }
-  vocab::VocabularyTrainOptions train;
-  train.k = 10;
-  train.levels = 4;
-  return std::make_shared<const vocab::Vocabulary>(vocab::Vocabulary::Train(descriptors, train));
+// The shipped vocabulary (data/vocab/, docs/VOCABULARY.md: trained on synthetic training frames,
+// none of these sequences), loaded once for all tests; tests run from the source tree.
+std::shared_ptr<const vocab::Vocabulary> ShippedVocabulary() {
+  static const auto vocabulary = std::make_shared<const vocab::Vocabulary>(
+      vocab::Vocabulary::Load("data/vocab/moslam_orb.mvoc"));
+  return vocabulary;
 }
 
 // Translation error of frame i's estimated pose (relative to frame 0, as the system's world is)
@@ -146,7 +137,7 @@ std::vector<FrameReport> FeedSteps(const TestSequence& s, const std::vector<Step
 TEST(Relocalization, ThirtyFrameGapRgbd) {
   constexpr size_t kGapFirst = 60, kGapLast = 90, kFrames = 110;
   const auto s = Generate("static_xyz", 1, kFrames, "");
-  const auto voc = TrainVocabulary(*s, 10);
+  const auto voc = ShippedVocabulary();
   std::vector<Step> dropped, covered;
   for (size_t i = 0; i < kFrames; ++i) {
     const bool in_gap = i >= kGapFirst && i < kGapLast;
@@ -200,7 +191,7 @@ TEST(Relocalization, ThirtyFrameGapRgbd) {
 TEST(Relocalization, KidnapBackToAMappedPlaceStereo) {
   MOSLAM_SHARED_OR_SKIP(folder, "data/kitti/06_000000-000050");
   const auto s = ReadKitti(folder);
-  const auto voc = TrainVocabulary(*s, 2);
+  const auto voc = ShippedVocabulary();
   std::vector<Step> steps;
   for (size_t i = 0; i < 51; ++i) steps.push_back({i});
   for (size_t i = 5; i < 10; ++i) steps.push_back({i});
