@@ -1,6 +1,7 @@
 // `moslam run`: runs the SLAM system over a data set and writes trajectories, a per-frame log and
 // a summary (runner/outputs.h). The loop itself is moslam::runner (RunSequence, tested with a fake
 // tracker); this file maps options and adapts slam::System to runner::Tracker.
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -33,7 +34,7 @@ struct RunArgs {
   std::string out;
   std::string frames;
   std::string skip_frames;
-  std::string vocabulary;
+  std::string vocabulary = "default";  // FILE, "default" (the shipped one) or "none"
   double rate_hz = 0.0;
   size_t queue = 4;
   bool realtime = false;
@@ -77,6 +78,25 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
       "this moslam was built without the SLAM core (target moslam::slam); `moslam run` "
       "needs it");
 #endif
+}
+
+// The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
+// moslam is run from like the configs/ paths of the examples.
+constexpr const char* kShippedVocabulary = "data/vocab/moslam_orb.mvoc";
+
+// --vocabulary: a file, "none", or "default" = the shipped one when it is there (else none).
+std::string ResolveVocabulary(const std::string& arg) {
+  if (arg == "none") return "";
+  if (arg != "default") {
+    if (!std::filesystem::is_regular_file(arg)) ThrowInput("--vocabulary: no file '{}'", arg);
+    return arg;
+  }
+  if (std::filesystem::is_regular_file(kShippedVocabulary)) return kShippedVocabulary;
+  spdlog::warn(
+      "no vocabulary ({} not found here; run from the repository root or pass "
+      "--vocabulary FILE): no relocalization",
+      kShippedVocabulary);
+  return "";
 }
 
 runner::MaskOptions MakeMaskOptions(const RunArgs& args) {
@@ -148,8 +168,8 @@ void Run(const RunArgs& args) {
   spdlog::info("{}: {} frames ({}), masks: {}", sequence.root, sequence.size(),
                io::ToString(sequence.sensor), description.mask_source);
 
-  const std::unique_ptr<runner::Tracker> tracker =
-      MakeTracker(settings, sequence.sensor, args.deterministic, args.vocabulary);
+  const std::unique_ptr<runner::Tracker> tracker = MakeTracker(
+      settings, sequence.sensor, args.deterministic, ResolveVocabulary(args.vocabulary));
   const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
   const std::string summary = runner::WriteRunOutputs(sequence, result, description, out);
@@ -199,9 +219,11 @@ void AddRunCommand(CLI::App& app) {
                       "exercise relocalization)");
   command
       ->add_option("--vocabulary", args->vocabulary,
-                   "Bag-of-words vocabulary (moslam binary .mvoc or ORB-SLAM2's ORBvoc.txt): "
-                   "enables relocalization when tracking is lost (default: none)")
-      ->check(CLI::ExistingFile);
+                   "Bag-of-words vocabulary (moslam binary .mvoc or ORB-SLAM2's ORBvoc.txt) for "
+                   "relocalization when tracking is lost; 'default': the shipped "
+                   "data/vocab/moslam_orb.mvoc (relative to the working directory, skipped with a "
+                   "warning when absent); 'none': no relocalization")
+      ->capture_default_str();
   command->add_option(
       "--rate", args->rate_hz,
       "folder: frames per second of the images (default: the settings' Camera.fps)");
