@@ -222,13 +222,24 @@ TEST(Relocalization, KidnapBackToAMappedPlaceStereo) {
   for (size_t k = 51; k < 56; ++k) EXPECT_EQ(without[k].state, TrackingState::kLost) << k;
 
   // With local mapping in its own thread (keyframes indexed and culled concurrently with the
-  // queries): relocalized all the same, on the first kidnapped frame.
+  // queries; the map at the kidnap differs from run to run): relocalized within one frame, as
+  // ORB-SLAM2 (which marks the kidnapped frame lost and relocalizes the next). The kidnapped
+  // frame may pass the reference-keyframe match and then fail the local map: lost.
   const auto threaded = FeedSteps(*s, steps, voc, nullptr, /*deterministic=*/false);
-  ASSERT_EQ(threaded[51].state, TrackingState::kOk) << threaded[51].reason;
-  EXPECT_TRUE(threaded[51].relocalized);
-  EXPECT_LT(
-      (threaded[51].T_world_cam->translation() - threaded[5].T_world_cam->translation()).norm(),
-      0.05);
+  size_t k = 51;
+  if (!threaded[k].relocalized) {
+    EXPECT_EQ(threaded[k].state, TrackingState::kLost);
+    ++k;
+  }
+  ASSERT_TRUE(threaded[k].relocalized) << threaded[k].reason;
+  for (; k < 56; ++k) {
+    const size_t i = steps[k].index;
+    ASSERT_EQ(threaded[k].state, TrackingState::kOk) << "frame " << i;
+    EXPECT_LT(
+        (threaded[k].T_world_cam->translation() - threaded[i].T_world_cam->translation()).norm(),
+        0.05)
+        << "frame " << i;
+  }
 }
 
 }  // namespace
