@@ -99,7 +99,8 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
     }
     if (!ok && database_) {
       ok = Relocalize(&out);
-      if (!ok) out.reason = "relocalization failed";
+      if (!ok)
+        out.reason += out.reason.empty() ? "relocalization failed" : "; relocalization failed";
     }
   }
   out.track_ms = MsSince(t0);
