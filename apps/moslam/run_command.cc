@@ -1,6 +1,7 @@
 // `moslam run`: runs the SLAM system over a data set and writes trajectories, a per-frame log and
 // a summary (runner/outputs.h). The loop itself is moslam::runner (RunSequence, tested with a fake
 // tracker); this file maps options and adapts slam::System to runner::Tracker.
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -35,6 +36,8 @@ struct RunArgs {
   int mask_dilate = 0;
   std::string out;
   std::string frames;
+  std::string skip_frames;
+  std::string vocabulary = "default";  // FILE, "default" (the shipped one) or "none"
   double rate_hz = 0.0;
   size_t queue = 4;
   bool realtime = false;
@@ -59,22 +62,44 @@ class SystemTracker : public runner::Tracker {
 #endif
 
 std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings,
-                                             io::SensorType sensor, bool deterministic) {
+                                             io::SensorType sensor, bool deterministic,
+                                             const std::string& vocabulary) {
 #if MOSLAM_HAVE_SLAM
   slam::SystemOptions options;
   options.sensor = sensor;
   options.settings = settings;
   options.deterministic = deterministic;
+  options.vocabulary_path = vocabulary;
   options.Check();
   return std::make_unique<SystemTracker>(options);
 #else
   (void)settings;
   (void)sensor;
   (void)deterministic;
+  (void)vocabulary;
   ThrowInput(
       "this moslam was built without the SLAM core (target moslam::slam); `moslam run` "
       "needs it");
 #endif
+}
+
+// The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
+// moslam is run from like the configs/ paths of the examples.
+constexpr const char* kShippedVocabulary = "data/vocab/moslam_orb.mvoc";
+
+// --vocabulary: a file, "none", or "default" = the shipped one when it is there (else none).
+std::string ResolveVocabulary(const std::string& arg) {
+  if (arg == "none") return "";
+  if (arg != "default") {
+    if (!std::filesystem::is_regular_file(arg)) ThrowInput("--vocabulary: no file '{}'", arg);
+    return arg;
+  }
+  if (std::filesystem::is_regular_file(kShippedVocabulary)) return kShippedVocabulary;
+  spdlog::warn(
+      "no vocabulary ({} not found here; run from the repository root or pass "
+      "--vocabulary FILE): no relocalization",
+      kShippedVocabulary);
+  return "";
 }
 
 runner::MaskOptions MakeMaskOptions(const RunArgs& args) {
@@ -127,6 +152,9 @@ void Run(const RunArgs& args) {
       runner::MakeMaskSource(MakeMaskOptions(args), sequence);
   runner::RunOptions options;
   if (!args.frames.empty()) options.frames = runner::ParseFrameRange(args.frames);
+  if (!args.skip_frames.empty()) {
+    options.skip = runner::ParseFrameRange(args.skip_frames, "--skip-frames");
+  }
   options.realtime = args.realtime;
   options.progress = !args.quiet;
   options.queue_capacity = args.queue;
@@ -148,8 +176,8 @@ void Run(const RunArgs& args) {
   spdlog::info("{}: {} frames ({}), masks: {}", sequence.root, sequence.size(),
                io::ToString(sequence.sensor), description.mask_source);
 
-  const std::unique_ptr<runner::Tracker> tracker =
-      MakeTracker(settings, sequence.sensor, args.deterministic);
+  const std::unique_ptr<runner::Tracker> tracker = MakeTracker(
+      settings, sequence.sensor, args.deterministic, ResolveVocabulary(args.vocabulary));
   const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
   const std::string summary = runner::WriteRunOutputs(sequence, result, description, out);
@@ -204,6 +232,16 @@ void AddRunCommand(CLI::App& app) {
   command->add_option("--out", args->out, "Output folder")->default_str("run_<sequence name>");
   command->add_option("--frames", args->frames,
                       "Sub-range A:B of frame indices (B excluded; A: and :B too)");
+  command->add_option("--skip-frames", args->skip_frames,
+                      "Frames A..B-1 are never given to the tracker (a gap in the recording, to "
+                      "exercise relocalization)");
+  command
+      ->add_option("--vocabulary", args->vocabulary,
+                   "Bag-of-words vocabulary (moslam binary .mvoc or ORB-SLAM2's ORBvoc.txt) for "
+                   "relocalization when tracking is lost; 'default': the shipped "
+                   "data/vocab/moslam_orb.mvoc (relative to the working directory, skipped with a "
+                   "warning when absent); 'none': no relocalization")
+      ->capture_default_str();
   command->add_option(
       "--rate", args->rate_hz,
       "folder: frames per second of the images (default: the settings' Camera.fps)");

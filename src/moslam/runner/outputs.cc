@@ -91,7 +91,7 @@ nlohmann::json Breakdown(const RunResult& r) {
 }
 
 struct StateCounts {
-  int ok = 0, lost = 0, not_initialized = 0, keyframes = 0;
+  int ok = 0, lost = 0, not_initialized = 0, keyframes = 0, relocalized = 0;
 };
 
 StateCounts CountStates(const RunResult& result) {
@@ -101,6 +101,7 @@ StateCounts CountStates(const RunResult& result) {
     if (f.report.state == slam::TrackingState::kLost) ++counts.lost;
     if (f.report.state == slam::TrackingState::kNotInitialized) ++counts.not_initialized;
     if (f.report.new_keyframe) ++counts.keyframes;
+    if (f.report.relocalized) ++counts.relocalized;
   }
   return counts;
 }
@@ -173,12 +174,12 @@ void WriteFramesCsv(const RunResult& result, const std::string& path) {
   for (const FrameRecord& f : result.frames) {
     const slam::FrameReport& r = f.report;
     out << fmt::format(
-        "{},{:.6f},{},{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.3f},{:.3f}"
-        "\n",
+        "{},{:.6f},{},{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.3f},{:.3f},"
+        "{}\n",
         f.index, f.timestamp, StateName(r.state), CsvField(r.reason), r.num_features, r.num_matches,
         r.num_inliers, r.new_keyframe ? 1 : 0, r.times.extract_ms, r.times.track_ms,
         r.times.local_map_ms, r.times.keyframe_ms, r.times.total_ms, f.mask_ms, f.mask_fraction,
-        f.network_ms, f.crf_ms);
+        f.network_ms, f.crf_ms, r.relocalized ? 1 : 0);
   }
   CheckWritten(out, path);
 }
@@ -227,6 +228,8 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                          {"tracked", counts.ok},
                          {"lost", counts.lost},
                          {"not_initialized", counts.not_initialized},
+                         {"relocalized", counts.relocalized},
+                         {"skipped", result.skipped},
                          {"new_keyframe_frames", counts.keyframes},
                          {"keyframes", result.map.keyframes},
                          {"map_points", result.map.map_points},
@@ -257,9 +260,12 @@ std::string FormatSummary(const RunResult& result, const RunDescription& d,
   std::string text;
   text += fmt::format("data set     {} ({}, {})\n", d.dataset_path, io::ToString(d.format),
                       io::ToString(d.sensor));
-  text += fmt::format("frames       {} ({}:{}): {} tracked, {} lost, {} not initialized\n",
-                      result.frames.size(), result.first, result.last, counts.ok, counts.lost,
-                      counts.not_initialized);
+  text += fmt::format(
+      "frames       {} ({}:{}): {} tracked, {} lost, {} not initialized{}{}\n",
+      result.frames.size(), result.first, result.last, counts.ok, counts.lost,
+      counts.not_initialized,
+      counts.relocalized > 0 ? fmt::format(", {} relocalized", counts.relocalized) : std::string(),
+      result.skipped > 0 ? fmt::format(", {} skipped", result.skipped) : std::string());
   text += fmt::format("map          {} keyframes, {} map points\n", result.map.keyframes,
                       result.map.map_points);
   text += fmt::format("masks        {}\n", d.mask_source);

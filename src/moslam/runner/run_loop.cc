@@ -35,17 +35,17 @@ const char* StateName(slam::TrackingState state) {
   return "?";
 }
 
-FrameRange ParseFrameRange(const std::string& text) {
+FrameRange ParseFrameRange(const std::string& text, const std::string& option) {
   const size_t colon = text.find(':');
   if (colon == std::string::npos || text.find(':', colon + 1) != std::string::npos) {
-    ThrowInput("--frames: expected A:B, A: or :B (frame indices, B excluded), got '{}'", text);
+    ThrowInput("{}: expected A:B, A: or :B (frame indices, B excluded), got '{}'", option, text);
   }
   auto parse = [&](std::string_view part) -> std::optional<size_t> {
     part = Trim(part);
     if (part.empty()) return std::nullopt;
     const auto value = ParseInt(part);
     if (!value || *value < 0) {
-      ThrowInput("--frames: '{}' is not a frame index (a whole number >= 0) in '{}'", part, text);
+      ThrowInput("{}: '{}' is not a frame index (a whole number >= 0) in '{}'", option, part, text);
     }
     return static_cast<size_t>(*value);
   };
@@ -53,7 +53,7 @@ FrameRange ParseFrameRange(const std::string& text) {
   range.first = parse(std::string_view(text).substr(0, colon)).value_or(0);
   range.last = parse(std::string_view(text).substr(colon + 1));
   if (range.last && *range.last <= range.first) {
-    ThrowInput("--frames: the range '{}' is empty (B must be greater than A)", text);
+    ThrowInput("{}: the range '{}' is empty (B must be greater than A)", option, text);
   }
   return range;
 }
@@ -104,7 +104,12 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource
     ThrowInput("--frames: {}:{} is outside the sequence's {} frames (0:{})", result.first,
                result.last, sequence.size(), sequence.size());
   }
-  const size_t count = result.last - result.first;
+  const auto skipped = [&](size_t index) {
+    return options.skip && index >= options.skip->first &&
+           (!options.skip->last || index < *options.skip->last);
+  };
+  for (size_t i = result.first; i < result.last; ++i) result.skipped += skipped(i) ? 1 : 0;
+  const size_t count = result.last - result.first - result.skipped;
   result.frames.reserve(count);
   const auto start = Clock::now();
   std::optional<Progress> progress;
@@ -121,6 +126,8 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource
                             options.queue_capacity);
     const double first_stamp = sequence.frames[result.first].timestamp;
     while (std::optional<LoadedFrame> frame = stage.Next()) {
+      // Skipped frames are loaded (the loader reads the range in order) but never tracked.
+      if (skipped(static_cast<size_t>(frame->index))) continue;
       if (options.realtime) {
         // Pacing is the one legitimate sleep: a frame is not given to the tracker before its
         // time on the data set's clock, counted from the first frame.

@@ -25,11 +25,14 @@ struct FrameRange {
   std::optional<size_t> last;  // nullopt: to the end of the sequence
 };
 // "A:B" (frames A..B-1), "A:" (from A), ":B" (up to B-1), as Python slices without negatives.
-// InputError for anything else.
-FrameRange ParseFrameRange(const std::string& text);
+// InputError (naming `option`) for anything else.
+FrameRange ParseFrameRange(const std::string& text, const std::string& option = "--frames");
 
 struct RunOptions {
-  FrameRange frames;          // sub-range to run; checked against the sequence in RunSequence
+  FrameRange frames;  // sub-range to run; checked against the sequence in RunSequence
+  // Frames (indices) inside `frames` that are not given to the tracker at all, as if the camera
+  // had recorded nothing then (a gap: `moslam run --skip-frames A:B`); nullopt: none.
+  std::optional<FrameRange> skip;
   bool realtime = false;      // pace frames by their timestamps instead of running flat out
   bool progress = true;       // periodic progress line (frames/s, ETA) via util/progress.h
   size_t queue_capacity = 4;  // frames loaded ahead of segmentation, and segmented ahead of
@@ -53,6 +56,7 @@ struct FrameRecord {
 struct RunResult {
   size_t first = 0;  // the range that was run
   size_t last = 0;
+  size_t skipped = 0;  // frames of the range left out (RunOptions::skip)
   std::vector<FrameRecord> frames;
   eval::Trajectory camera;     // Tracker::CameraTrajectory after Finish
   eval::Trajectory keyframes;  // Tracker::KeyFrameTrajectory after Finish

@@ -85,7 +85,7 @@ TEST(RunLoopTest, TumRunWritesEveryOutputInItsFormat) {
   const auto csv = Lines((dir / "frames.csv").string());
   ASSERT_EQ(csv.size(), 7u);
   EXPECT_EQ(csv[0], kFramesCsvHeader);
-  EXPECT_EQ(SplitFields(csv[0], true).size(), 17u);
+  EXPECT_EQ(SplitFields(csv[0], true).size(), 18u);
   EXPECT_THAT(csv[1], ::testing::StartsWith("0," + test::Stamp(0) + ",ok,,100,80,60,1,1.000,"));
   EXPECT_THAT(csv[4], HasSubstr(",lost,\"too few matches, said the fake\",103,"));
   // Summary with the ATE against groundtruth.txt: the fake reports the true poses.
@@ -164,6 +164,25 @@ TEST(RunLoopTest, SharedKittiExcerptWithGroundTruthTracker) {
   ASSERT_TRUE(summary["ate"].is_object());
   EXPECT_EQ(summary["ate"]["translation_m"]["count"], 51);
   EXPECT_LT(summary["ate"]["translation_m"]["rmse"].get<double>(), 1e-5);
+}
+
+TEST(RunLoopTest, SkippedFramesNeverReachTheTracker) {
+  testing::TempDir data;
+  test::MakeKitti(data, 6);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  const auto masks = MakeMaskSource({}, seq);
+  FakeTracker tracker;
+  RunOptions options = Quiet();
+  options.frames = ParseFrameRange("1:");
+  options.skip = ParseFrameRange("2:4", "--skip-frames");
+  const RunResult result = RunSequence(seq, tracker, *masks, options);
+  ASSERT_EQ(result.frames.size(), 3u);
+  EXPECT_EQ(result.frames[0].index, 1);
+  EXPECT_EQ(result.frames[1].index, 4);
+  EXPECT_EQ(result.frames[2].index, 5);
+  EXPECT_EQ(result.skipped, 2u);
+  EXPECT_THAT(ErrorOf([] { ParseFrameRange("4:2", "--skip-frames"); }),
+              HasSubstr("--skip-frames: the range '4:2' is empty"));
 }
 
 TEST(RunLoopTest, FrameRangeSelectsAndIsChecked) {

@@ -12,6 +12,7 @@
 #include <thread>
 #include <utility>
 
+#include <spdlog/spdlog.h>
 #include <opencv2/imgproc.hpp>
 
 #include "moslam/camera/stereo_camera.h"
@@ -19,10 +20,12 @@
 #include "moslam/feature/frame.h"
 #include "moslam/feature/orb_extractor.h"
 #include "moslam/map/map.h"
+#include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/local_mapper.h"
 #include "moslam/slam/tracker.h"
 #include "moslam/util/bounded_queue.h"
 #include "moslam/util/error.h"
+#include "moslam/vocab/vocabulary.h"
 
 namespace moslam::slam {
 
@@ -68,6 +71,20 @@ cv::Mat ToGrey(const cv::Mat& image, bool rgb) {
   return grey;
 }
 
+// The vocabulary of the options (given, loaded from the path, or none).
+std::shared_ptr<const vocab::Vocabulary> LoadVocabulary(const SystemOptions& options) {
+  if (options.vocabulary) return options.vocabulary;
+  if (options.vocabulary_path.empty()) return nullptr;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto vocabulary =
+      std::make_shared<const vocab::Vocabulary>(vocab::Vocabulary::Load(options.vocabulary_path));
+  spdlog::info(
+      "vocabulary {}: {} words, k {}, {} levels, loaded in {:.0f} ms", options.vocabulary_path,
+      vocabulary->size(), vocabulary->k(), vocabulary->levels(),
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  return vocabulary;
+}
+
 double MsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -84,7 +101,15 @@ class System::Impl : public KeyFrameSink {
         right_extractor_(ExtractorOptions(options.settings)),
         queue_(static_cast<size_t>(options.keyframe_queue_capacity)),
         mapper_(&map_, camera_, options.settings.bf, MapperOptions(options)),
-        tracker_(&map_, camera_, options.settings.bf, TrackerOpts(options), this) {
+        tracker_(&map_, camera_, options.settings.bf, TrackerOpts(options), this),
+        vocabulary_(LoadVocabulary(options)) {
+    if (vocabulary_ && !vocabulary_->empty()) {
+      keyframe_database_ = std::make_unique<KeyFrameDatabase>(vocabulary_);
+      mapper_.SetKeyFrameDatabase(keyframe_database_.get());
+      tracker_.SetKeyFrameDatabase(keyframe_database_.get());
+      map_.SetKeyFrameEraseListener(
+          [db = keyframe_database_.get()](const map::KeyFrame& kf) { db->Erase(kf); });
+    }
     if (!options_.deterministic) mapping_thread_ = std::thread([this] { MappingLoop(); });
   }
   ~Impl() override { Finish(); }
@@ -124,6 +149,8 @@ class System::Impl : public KeyFrameSink {
     report.num_matches = outcome.num_matches;
     report.num_inliers = outcome.num_inliers;
     report.new_keyframe = outcome.new_keyframe;
+    report.relocalized = outcome.relocalized;
+    if (outcome.relocalized) ++relocalizations_;
     report.times.track_ms = outcome.track_ms;
     report.times.local_map_ms = outcome.local_map_ms;
     report.times.keyframe_ms = outcome.keyframe_ms;
@@ -189,6 +216,7 @@ class System::Impl : public KeyFrameSink {
       summary.map_points = static_cast<int>(map_.points().size());
     }
     summary.lost_frames = lost_frames_;
+    summary.relocalizations = relocalizations_;
     const std::vector<double> steps = mapper_.StepTimes();
     summary.mapping_steps = static_cast<int>(steps.size());
     for (double ms : steps) summary.mapping_ms_total += ms;
@@ -228,9 +256,14 @@ class System::Impl : public KeyFrameSink {
   BoundedQueue<std::shared_ptr<map::KeyFrame>> queue_;
   LocalMapper mapper_;
   Tracker tracker_;
+  // Bag of words (SystemOptions::vocabulary): shared, immutable; null without a vocabulary. The
+  // database is guarded by the map mutex (keyframe_database.h).
+  std::shared_ptr<const vocab::Vocabulary> vocabulary_;
+  std::unique_ptr<KeyFrameDatabase> keyframe_database_;
   std::atomic<bool> mapping_busy_{false};
   std::thread mapping_thread_;
   int lost_frames_ = 0;
+  int relocalizations_ = 0;
 };
 
 System::System(const SystemOptions& options) : impl_(std::make_unique<Impl>(options)) {}
