@@ -60,7 +60,9 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
     if (keyframe->bad()) return;  // erased while it waited in the queue
     InsertKeyFrame(keyframe);
     CullRecentPoints(keyframe);
-    search = PrepareTriangulationSearch(keyframe, camera_);
+    NewPointsOptions new_points;
+    new_points.num_neighbours = options_.monocular ? 20 : 10;
+    search = PrepareTriangulationSearch(keyframe, camera_, new_points);
   }
   RunTriangulationSearch(&search, camera_);  // on a snapshot, without the lock
   {
@@ -71,7 +73,7 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
   }
   if (!busy()) {
     std::lock_guard<std::mutex> lock(map_->mutex());
-    SearchInNeighbors(map_, keyframe, camera_);
+    SearchInNeighbors(map_, keyframe, camera_, options_.monocular ? 20 : 10);
   }
   if (!busy() && options_.local_bundle_adjustment) LocalBundleAdjustment(keyframe);
   if (options_.keyframe_culling) {
@@ -111,13 +113,15 @@ void LocalMapper::InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe)
 }
 
 void LocalMapper::CullRecentPoints(const std::shared_ptr<map::KeyFrame>& keyframe) {
-  // ORB-SLAM2's MapPointCulling (stereo: at least 3 observations after two keyframes).
+  // ORB-SLAM2's MapPointCulling: two keyframes after its creation a point seen by at most
+  // cnThObs keyframes is erased (cnThObs: 3 stereo / RGB-D, 2 monocular).
+  const int max_obs_culled = options_.monocular ? 2 : 3;
   std::vector<std::weak_ptr<map::MapPoint>> kept;
   for (const auto& weak : recent_points_) {
     auto p = weak.lock();
     if (!p || p->bad) continue;
     const uint64_t age = keyframe->id - std::min(keyframe->id, p->first_keyframe_id);
-    if (p->FoundRatio() < 0.25f || (age >= 2 && p->num_observations() <= 3)) {
+    if (p->FoundRatio() < 0.25f || (age >= 2 && p->num_observations() <= max_obs_culled)) {
       map_->EraseMapPoint(p);
     } else if (age < 3) {
       kept.push_back(p);

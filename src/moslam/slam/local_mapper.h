@@ -37,6 +37,9 @@ struct LocalMapperOptions {
   bool far_stereo_as_monocular = false;
   bool keyframe_culling = true;
   int num_threads = 1;  // Ceres threads in bundle adjustment
+  // Monocular keyframes (ORB-SLAM2's monocular settings): 20 neighbours for triangulation and
+  // fusion instead of 10, and recent points culled with 2 observations instead of 3.
+  bool monocular = false;
 };
 
 // Stereo/RGB-D bundle adjustment is defined up to a rigid motion of everything (gauge freedom);

@@ -1,7 +1,8 @@
 // Test and tool support (not used by the library): runs slam::System over a data-set folder and
-// scores the camera trajectory against the ground truth with the TUM-convention ATE (SE(3)
-// alignment). apps/moslam's `run` command is the user-facing path; this is the small loop the
-// end-to-end tests and tools/slam_eval need.
+// scores the camera and keyframe trajectories against the ground truth with the TUM-convention
+// ATE (SE(3) alignment; Sim(3) for monocular runs, whose scale is arbitrary). apps/moslam's `run`
+// command is the user-facing path; this is the small loop the end-to-end tests and tools/slam_eval
+// need.
 #pragma once
 
 #include <time.h>
@@ -35,7 +36,9 @@ struct DatasetRun {
   eval::Trajectory estimate;
   MapSummary summary;
   int frames_ok = 0;
-  double ate_rmse = -1.0;        // metres; < 0 without ground truth
+  double ate_rmse = -1.0;           // metres, camera trajectory; < 0 without ground truth
+  double keyframe_ate_rmse = -1.0;  // metres, keyframe trajectory; < 0 without ground truth
+  eval::Trajectory keyframes;
   double track_ms_median = 0.0;  // FrameReport::times.total_ms (wall clock)
   // CPU time of the calling (tracking) thread per Track() call: on a machine shared with other
   // jobs, the wall clock counts time spent waiting for a core; this does not.
@@ -86,6 +89,7 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
     }
     system.Finish();
     run.estimate = system.CameraTrajectory();
+    run.keyframes = system.KeyFrameTrajectory();
     run.summary = system.Summary();
   }
   run.track_ms_median = eval::Median(total_ms);
@@ -100,9 +104,15 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
         gt.timestamps.push_back(sequence.frames[k].timestamp);
       }
     }
-    const eval::AteResult ate =
-        eval::ComputeAte(gt, run.estimate, eval::AteOptions::Defaults(eval::Convention::kTum));
-    run.ate_rmse = ate.translation.stats.rmse;
+    eval::AteOptions ate_options = eval::AteOptions::Defaults(eval::Convention::kTum);
+    if (options.sensor == io::SensorType::kMonocular) {
+      ate_options.alignment = eval::AlignmentMode::kSim3;
+    }
+    run.ate_rmse = eval::ComputeAte(gt, run.estimate, ate_options).translation.stats.rmse;
+    if (run.keyframes.size() >= 3) {
+      run.keyframe_ate_rmse =
+          eval::ComputeAte(gt, run.keyframes, ate_options).translation.stats.rmse;
+    }
   }
   return run;
 }
