@@ -8,8 +8,10 @@
 #include <time.h>
 
 #include <algorithm>
+#include <chrono>
 #include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "moslam/eval/ate.h"
@@ -54,11 +56,15 @@ inline double ThreadCpuMs() {
 // `max_frames` <= 0: all frames. `mask_folder`: when set, each frame's movable-object mask is
 // read from the image path with its "rgb" (or "image_0") folder replaced by this one (the
 // layout of `moslam synth`: rgb/<stamp>.png -> moving/<stamp>.png). `adjust` (may be empty) edits
-// the SystemOptions before the run (experiments: local BA off, ...).
+// the SystemOptions before the run (experiments: local BA off, ...). `realtime`: frames are
+// handed over no faster than their timestamps, as a camera would (ORB-SLAM2's examples wait the
+// same way), so threaded local mapping gets the time a live run gives it; without it frames come
+// as fast as tracking takes them, which starves mapping on a loaded machine.
 inline DatasetRun RunDataset(const std::string& folder, const std::string& settings_path,
                              bool deterministic, int max_frames = 0,
                              const std::string& mask_folder = "",
-                             const std::function<void(SystemOptions*)>& adjust = {}) {
+                             const std::function<void(SystemOptions*)>& adjust = {},
+                             bool realtime = false) {
   const io::Sequence sequence = io::ReadDataset(folder);
   SystemOptions options;
   options.sensor = sequence.sensor;
@@ -71,8 +77,14 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
     System system(options);
     const size_t n =
         max_frames > 0 ? std::min<size_t>(max_frames, sequence.size()) : sequence.size();
+    const auto start = std::chrono::steady_clock::now();
     for (size_t i = 0; i < n; ++i) {
       const io::FrameEntry& entry = sequence.frames[i];
+      if (realtime) {
+        const double offset_s = entry.timestamp - sequence.frames[0].timestamp;
+        std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                  std::chrono::duration<double>(offset_s)));
+      }
       const io::FrameImages images =
           io::LoadFrameImages(entry, io::ColourMode::kGrey, options.settings.depth_map_factor);
       FrameInput input;
