@@ -75,6 +75,7 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
     std::lock_guard<std::mutex> lock(map_->mutex());
     SearchInNeighbors(map_, keyframe, camera_, options_.monocular ? 20 : 10);
   }
+  abort_ba_ = false;  // a request from before this keyframe's adjustment is void (ORB-SLAM2)
   if (!busy() && options_.local_bundle_adjustment) LocalBundleAdjustment(keyframe);
   if (options_.keyframe_culling) {
     std::lock_guard<std::mutex> lock(map_->mutex());
@@ -194,6 +195,7 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
   }
   optim::BundleAdjusterOptions options;
   options.num_threads = options_.num_threads;
+  options.stop = &abort_ba_;
   const optim::BundleResult result = optim::AdjustBundle(problem, options);
 
   int outliers = 0;

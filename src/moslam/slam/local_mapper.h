@@ -11,6 +11,7 @@
 // and points erased in between (map/map.h). Scratch state (the recent-points list) lives here.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -59,6 +60,10 @@ class LocalMapper {
   void ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe,
                        const std::function<bool()>& more_queued = {});
 
+  // ORB-SLAM2's InterruptBA: a running local bundle adjustment stops after its current iteration
+  // (thread-safe; the flag is cleared when the next adjustment starts).
+  void InterruptBundleAdjustment() { abort_ba_ = true; }
+
   // Milliseconds per processed keyframe (thread-safe copy).
   std::vector<double> StepTimes() const;
 
@@ -72,6 +77,7 @@ class LocalMapper {
   optim::CameraModel model_;
   LocalMapperOptions options_;
   std::vector<std::weak_ptr<map::MapPoint>> recent_points_;
+  std::atomic<bool> abort_ba_{false};
   mutable std::mutex stats_mutex_;
   std::vector<double> step_ms_;
 };

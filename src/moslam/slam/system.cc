@@ -123,6 +123,7 @@ class System::Impl : public KeyFrameSink {
     return options_.deterministic || (!mapping_busy_.load() && queue_.size() == 0);
   }
   size_t QueuedKeyFrames() const override { return queue_.size(); }
+  void InterruptMapping() override { mapper_.InterruptBundleAdjustment(); }
   void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) override {
     // Synchronous in deterministic mode, and after Finish() closed the queue (Track() may still
     // be called then; its keyframes are mapped in the caller's thread).

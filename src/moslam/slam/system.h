@@ -41,10 +41,10 @@ struct SystemOptions {
 struct FrameInput {
   double timestamp = 0.0;  // seconds
   cv::Mat image;           // left (stereo), colour (RGB-D) or the (monocular) image: CV_8UC1, or
-                  // CV_8UC3/CV_8UC4 converted to grey following settings.rgb
-  cv::Mat right;  // stereo: the rectified right image, same size and type
-  cv::Mat depth;  // RGB-D: CV_32FC1 metres registered to `image` (0 = invalid)
-  cv::Mat mask;   // CV_8UC1 of the image's size, non-zero = movable object; empty = none
+                           // CV_8UC3/CV_8UC4 converted to grey following settings.rgb
+  cv::Mat right;           // stereo: the rectified right image, same size and type
+  cv::Mat depth;           // RGB-D: CV_32FC1 metres registered to `image` (0 = invalid)
+  cv::Mat mask;            // CV_8UC1 of the image's size, non-zero = movable object; empty = none
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };

@@ -447,7 +447,14 @@ bool Tracker::NeedNewKeyFrame() const {
   const bool c1c = !options_.monocular && (last_inliers_ < ref_matches * 0.25 || need_close);
   const bool c2 = (last_inliers_ < ref_matches * th_ref || need_close) && last_inliers_ > 15;
   if (!((c1a || idle || c1c) && c2)) return false;
-  return idle || (!options_.monocular && sink_->QueuedKeyFrames() < 3);
+  if (idle) return true;
+  if (options_.monocular) {
+    // Mapping becomes idle sooner, and the next frame gets its keyframe in (ORB-SLAM2; only for
+    // monocular here, which has no other source of new points).
+    sink_->InterruptMapping();
+    return false;
+  }
+  return sink_->QueuedKeyFrames() < 3;
 }
 
 std::shared_ptr<map::KeyFrame> Tracker::CreateKeyFrame() {

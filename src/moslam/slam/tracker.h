@@ -37,6 +37,9 @@ class KeyFrameSink {
   virtual size_t QueuedKeyFrames() const = 0;
   // Called without the map lock held.
   virtual void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) = 0;
+  // Tracking wants a keyframe in while mapping is busy: stop the running local bundle adjustment
+  // (ORB-SLAM2's InterruptBA). Default: nothing.
+  virtual void InterruptMapping() {}
 };
 
 struct TrackerOptions {
