@@ -1,15 +1,18 @@
 // Two-view monocular initialization on synthetic correspondences with pixel noise and 20 %
 // outliers: model selection (planar scene -> homography, general scene -> fundamental), the
-// recovered motion against the ground truth, and degenerate inputs reported as results.
+// recovered motion against the ground truth, and degenerate inputs reported as results; and the
+// initialization matcher on a shifted synthetic image.
 #include "moslam/slam/mono_initializer.h"
 
 #include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include <Eigen/Geometry>
 
+#include "moslam/feature/test_images.h"
 #include "moslam/util/error.h"
 
 namespace moslam::slam {
@@ -158,6 +161,62 @@ TEST(MonoInitializer, RejectsBadOptions) {
   o.ransac_iterations = 0;
   const Scene s = MakeScene(false, TrueMotion(), 20, 0.0);
   EXPECT_THROW(InitializeTwoView(s.p1, s.p2, TestK(), o), InputError);
+}
+
+// SearchForInitialization on an image and its copy shifted by (12, -7) pixels: level-0 matches
+// that follow the shift, each keypoint of the second frame used once, and the previous-match
+// positions moved to the matches; with a window smaller than the shift no true match is found.
+TEST(SearchForInitialization, FollowsAnImageShiftInsideTheWindow) {
+  camera::PinholeOptions vga;
+  vga.fx = vga.fy = 500.0;
+  vga.cx = 320.0;
+  vga.cy = 240.0;
+  vga.width = 640;
+  vga.height = 480;
+  const camera::PinholeCamera cam(vga);
+  feature::OrbExtractorOptions orb;
+  orb.num_features = 1000;
+  feature::OrbExtractor extractor(orb);
+  const cv::Mat image = feature::test::TexturedImage(640, 480, 5);
+  const Eigen::Vector2f shift(12.0f, -7.0f);
+  cv::Mat shifted;
+  const cv::Mat A = (cv::Mat_<double>(2, 3) << 1, 0, shift.x(), 0, 1, shift.y());
+  cv::warpAffine(image, shifted, A, image.size(), cv::INTER_NEAREST, cv::BORDER_REFLECT);
+  const feature::Frame f1 = feature::MakeMonocularFrame(0.0, image, cv::Mat(), &extractor, cam);
+  const feature::Frame f2 = feature::MakeMonocularFrame(0.1, shifted, cv::Mat(), &extractor, cam);
+  std::vector<Eigen::Vector2f> start;
+  for (const auto& kp : f1.keypoints_undistorted) start.emplace_back(kp.pt.x, kp.pt.y);
+
+  std::vector<Eigen::Vector2f> prev = start;
+  const std::vector<int> m = SearchForInitialization(f1, f2, &prev, 100.0f, 0.9f);
+  ASSERT_EQ(m.size(), f1.size());
+  int matched = 0, correct = 0;
+  std::vector<bool> used(f2.size(), false);
+  for (size_t i = 0; i < m.size(); ++i) {
+    if (m[i] < 0) {
+      EXPECT_EQ(prev[i], start[i]);
+      continue;
+    }
+    ++matched;
+    EXPECT_EQ(f1.keypoints_undistorted[i].octave, 0);
+    EXPECT_FALSE(used[m[i]]) << "keypoint " << m[i] << " matched twice";
+    used[m[i]] = true;
+    const cv::Point2f& p2 = f2.keypoints_undistorted[m[i]].pt;
+    EXPECT_EQ(prev[i], Eigen::Vector2f(p2.x, p2.y));
+    if ((Eigen::Vector2f(p2.x, p2.y) - start[i] - shift).norm() < 1.5f) ++correct;
+  }
+  EXPECT_GT(matched, 100);
+  EXPECT_GT(correct, 0.95 * matched);
+
+  std::vector<Eigen::Vector2f> narrow = start;
+  const std::vector<int> m5 = SearchForInitialization(f1, f2, &narrow, 5.0f, 0.9f);
+  int correct5 = 0;
+  for (size_t i = 0; i < m5.size(); ++i) {
+    if (m5[i] < 0) continue;
+    const cv::Point2f& p2 = f2.keypoints_undistorted[m5[i]].pt;
+    if ((Eigen::Vector2f(p2.x, p2.y) - start[i] - shift).norm() < 1.5f) ++correct5;
+  }
+  EXPECT_EQ(correct5, 0);
 }
 
 }  // namespace
