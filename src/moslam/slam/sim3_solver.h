@@ -20,17 +20,13 @@
 
 #include "moslam/geometry/sim3.h"
 #include "moslam/optim/observation.h"
+#include "moslam/optim/sim3_optimizer.h"
 
 namespace moslam::slam {
 
-struct Sim3Correspondence {
-  Eigen::Vector3d p1 = Eigen::Vector3d::Zero();      // point in camera 1 (metres)
-  Eigen::Vector3d p2 = Eigen::Vector3d::Zero();      // the matched point in camera 2
-  Eigen::Vector2d pixel1 = Eigen::Vector2d::Zero();  // undistorted keypoint in keyframe 1
-  Eigen::Vector2d pixel2 = Eigen::Vector2d::Zero();  // undistorted keypoint in keyframe 2
-  double sigma2_1 = 1.0;  // pixel variance of the keypoint's pyramid level in keyframe 1
-  double sigma2_2 = 1.0;  // ... in keyframe 2
-};
+// p1, p2: the matched points in camera 1 and 2; pixel1, pixel2: their keypoints; sigma2_*: the
+// keypoints' level variances.
+using Sim3Correspondence = optim::Sim3Match;
 
 struct Sim3RansacOptions {
   bool fix_scale = true;      // true: SE(3) (stereo/RGB-D); false: Sim(3) (monocular)
