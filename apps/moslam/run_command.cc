@@ -37,6 +37,8 @@ struct RunArgs {
   bool realtime = false;
   bool deterministic = false;
   bool quiet = false;
+  std::string vocabulary;  // empty: none (no relocalization, no loop closing)
+  bool no_loop_closing = false;
 };
 
 #if MOSLAM_HAVE_SLAM
@@ -56,18 +58,20 @@ class SystemTracker : public runner::Tracker {
 #endif
 
 std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings,
-                                             io::SensorType sensor, bool deterministic) {
+                                             io::SensorType sensor, const RunArgs& args) {
 #if MOSLAM_HAVE_SLAM
   slam::SystemOptions options;
   options.sensor = sensor;
   options.settings = settings;
-  options.deterministic = deterministic;
+  options.deterministic = args.deterministic;
+  options.vocabulary_path = args.vocabulary;
+  options.loop_closing = !args.no_loop_closing;
   options.Check();
   return std::make_unique<SystemTracker>(options);
 #else
   (void)settings;
   (void)sensor;
-  (void)deterministic;
+  (void)args;
   ThrowInput(
       "this moslam was built without the SLAM core (target moslam::slam); `moslam run` "
       "needs it");
@@ -140,8 +144,7 @@ void Run(const RunArgs& args) {
   spdlog::info("{}: {} frames ({}), masks: {}", sequence.root, sequence.size(),
                io::ToString(sequence.sensor), description.mask_source);
 
-  const std::unique_ptr<runner::Tracker> tracker =
-      MakeTracker(settings, sequence.sensor, args.deterministic);
+  const std::unique_ptr<runner::Tracker> tracker = MakeTracker(settings, sequence.sensor, args);
   const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
   const std::string summary = runner::WriteRunOutputs(sequence, result, description, out);
@@ -197,6 +200,11 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--deterministic", args->deterministic,
                     "Fixed seeds, local mapping synchronous in the tracking thread");
   command->add_flag("--quiet", args->quiet, "No progress line and only warnings in the log");
+  command->add_option("--vocabulary", args->vocabulary,
+                      "ORB vocabulary (moslam binary or ORB-SLAM2's ORBvoc.txt): enables "
+                      "relocalization and loop closing");
+  command->add_flag("--no-loop-closing", args->no_loop_closing,
+                    "Run without loop closing even with a vocabulary (to measure what it does)");
   command->callback([args] {
     if (args->quiet) spdlog::set_level(std::max(spdlog::get_level(), spdlog::level::warn));
     Run(*args);

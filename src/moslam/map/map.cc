@@ -34,6 +34,7 @@ void Map::EraseKeyFrame(const std::shared_ptr<KeyFrame>& keyframe) {
   if (!keyframe || !keyframe->parent()) return;  // the first keyframe stays
   for (const auto& p : keyframe->SetBad(keyframes_)) EraseMapPoint(p);
   keyframes_.erase(keyframe->id);
+  if (erase_listener_) erase_listener_(*keyframe);
 }
 
 void Map::Replace(const std::shared_ptr<MapPoint>& old_point,

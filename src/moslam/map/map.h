@@ -20,9 +20,11 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <utility>
 #include <vector>
 
 #include "moslam/map/keyframe.h"
@@ -41,8 +43,15 @@ class Map {
 
   // Sets the point bad, drops its observations from the keyframes and removes it.
   void EraseMapPoint(const std::shared_ptr<MapPoint>& point);
-  // SetBad on the keyframe, then removes it and the points it orphaned.
+  // SetBad on the keyframe, then removes it and the points it orphaned, and tells the erase
+  // listener.
   void EraseKeyFrame(const std::shared_ptr<KeyFrame>& keyframe);
+  // Called by EraseKeyFrame (map mutex held) for every erased keyframe, so that indexes of
+  // keyframes kept outside the map (slam's keyframe database) drop it, as ORB-SLAM2's
+  // KeyFrame::SetBadFlag erases it from its KeyFrameDatabase. Must not lock the map mutex.
+  void SetKeyFrameEraseListener(std::function<void(const KeyFrame&)> listener) {
+    erase_listener_ = std::move(listener);
+  }
   // Fuses `old_point` into `new_point`: observations move (unless the keyframe already sees
   // new_point), counters add up, old_point is erased and remembers its replacement.
   void Replace(const std::shared_ptr<MapPoint>& old_point,
@@ -67,6 +76,7 @@ class Map {
   uint64_t next_keyframe_id_ = 0;
   uint64_t next_point_id_ = 0;
   uint64_t generation_ = 0;
+  std::function<void(const KeyFrame&)> erase_listener_;
 };
 
 }  // namespace moslam::map

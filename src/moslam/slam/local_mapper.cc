@@ -55,10 +55,20 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
   const auto t0 = std::chrono::steady_clock::now();
   const auto busy = [&] { return more_queued && more_queued(); };
   TriangulationSearch search;
+  // The BoW reads only the keyframe's immutable descriptors: computed without the lock.
+  KeyFrameBow bow;
+  if (database_) bow = database_->ComputeBow(keyframe->frame.descriptors);
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
     if (keyframe->bad()) return;  // erased while it waited in the queue
     InsertKeyFrame(keyframe);
+    if (database_) {
+      if (keyframe->bow.empty()) {
+        keyframe->bow = std::move(bow.bow);
+        keyframe->bow_features = std::move(bow.features);
+      }
+      database_->Add(keyframe);
+    }
     CullRecentPoints(keyframe);
     search = PrepareTriangulationSearch(keyframe, camera_);
   }

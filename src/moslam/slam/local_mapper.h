@@ -19,6 +19,7 @@
 #include "moslam/camera/pinhole_camera.h"
 #include "moslam/map/map.h"
 #include "moslam/optim/observation.h"
+#include "moslam/slam/keyframe_database.h"
 
 namespace moslam::slam {
 
@@ -56,6 +57,11 @@ class LocalMapper {
   void ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe,
                        const std::function<bool()>& more_queued = {});
 
+  // With a database, each keyframe's BoW is computed (ORB-SLAM2's ComputeBoW in
+  // ProcessNewKeyFrame) and the keyframe indexed once inserted. nullptr (default): neither. The
+  // database must outlive the mapper; call before the first ProcessKeyFrame.
+  void SetKeyFrameDatabase(KeyFrameDatabase* database) { database_ = database; }
+
   // Milliseconds per processed keyframe (thread-safe copy).
   std::vector<double> StepTimes() const;
 
@@ -68,6 +74,7 @@ class LocalMapper {
   camera::PinholeCamera camera_;
   optim::CameraModel model_;
   LocalMapperOptions options_;
+  KeyFrameDatabase* database_ = nullptr;
   std::vector<std::weak_ptr<map::MapPoint>> recent_points_;
   mutable std::mutex stats_mutex_;
   std::vector<double> step_ms_;

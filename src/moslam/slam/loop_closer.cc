@@ -6,7 +6,9 @@
 #include <spdlog/spdlog.h>
 
 #include "moslam/optim/sim3_optimizer.h"
+#include "moslam/slam/bow_matcher.h"
 #include "moslam/slam/sim3_solver.h"
+#include "moslam/util/check.h"
 #include "moslam/util/error.h"
 
 namespace moslam::slam {
@@ -60,8 +62,9 @@ std::vector<Sim3Correspondence> Correspondences(const map::KeyFrame& kf1, const 
 }  // namespace
 
 LoopCloser::LoopCloser(map::Map* map, const camera::PinholeCamera& camera, double bf,
-                       LoopCandidateSource* candidates, const LoopCloserOptions& options)
-    : map_(map), camera_(camera), candidates_(candidates), options_((options.Check(), options)) {
+                       KeyFrameDatabase* database, const LoopCloserOptions& options)
+    : map_(map), camera_(camera), database_(database), options_((options.Check(), options)) {
+  MOSLAM_CHECK(database_ != nullptr) << "loop closing needs a keyframe database";
   model_.fx = camera.fx();
   model_.fy = camera.fy();
   model_.cx = camera.cx();
@@ -120,19 +123,15 @@ bool LoopCloser::ProcessKeyFrame(const KeyFramePtr& keyframe) {
 bool LoopCloser::DetectLoop(const KeyFramePtr& kf, std::vector<KeyFramePtr>* consistent) {
   // Too soon after the start or after the last loop (ORB-SLAM2: 10 keyframes).
   if (kf->id < last_loop_keyframe_ + static_cast<uint64_t>(options_.min_keyframes_between_loops)) {
-    candidates_->Add(kf);
     return false;
   }
-  const std::vector<KeyFramePtr> covisible = kf->BestCovisibles(-1);
-  double min_score = 1.0;
-  for (const auto& n : covisible) min_score = std::min(min_score, candidates_->Score(*kf, *n));
+  if (kf->bow.empty()) database_->ComputeBow(kf.get());
   std::set<uint64_t> excluded = {kf->id};
-  for (const auto& n : covisible) excluded.insert(n->id);
+  for (const auto& n : kf->BestCovisibles(-1)) excluded.insert(n->id);
   std::vector<KeyFramePtr> found;
-  for (const auto& c : candidates_->DetectLoopCandidates(kf, min_score)) {
+  for (const auto& c : database_->DetectLoopCandidates(*kf, database_->MinCovisibleScore(*kf))) {
     if (c && !c->bad() && !excluded.count(c->id)) found.push_back(c);
   }
-  candidates_->Add(kf);
   if (found.empty()) {
     groups_.clear();
     return false;
@@ -171,7 +170,10 @@ bool LoopCloser::DetectLoop(const KeyFramePtr& kf, std::vector<KeyFramePtr>* con
 bool LoopCloser::ComputeSim3(const KeyFramePtr& kf, const std::vector<KeyFramePtr>& candidates,
                              DetectedLoop* loop) {
   for (const auto& cand : candidates) {
-    PointMatches matches = MatchKeyFramePoints(*kf, *cand);
+    // The direct index when both keyframes have one, brute force otherwise.
+    PointMatches matches = !kf->bow_features.empty() && !cand->bow_features.empty()
+                               ? SearchByBoW(*kf, *cand)
+                               : MatchKeyFramePoints(*kf, *cand);
     std::vector<size_t> index;
     std::vector<Sim3Correspondence> corr = Correspondences(*kf, *cand, matches, &index);
     if (static_cast<int>(corr.size()) < options_.min_point_matches) continue;

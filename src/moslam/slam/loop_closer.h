@@ -1,20 +1,22 @@
 // Loop closing (ORB-SLAM2's LoopClosing, Mur-Artal & Tardós 2017, Sec. V; ORB-SLAM, Mur-Artal et
 // al. 2015, Sec. VI), one keyframe at a time after local mapping:
 //  1. detection: bag-of-words candidates scoring at least the current keyframe's worst covisible
-//     neighbour (LoopCandidateSource), kept only when a candidate's covisibility group was
-//     consistent with those of the previous 3 keyframes;
-//  2. Sim(3) with each candidate: descriptor matches of their map points, RANSAC
+//     neighbour (KeyFrameDatabase::DetectLoopCandidates), kept only when a candidate's
+//     covisibility group was consistent with those of the previous 3 keyframes;
+//  2. Sim(3) with each candidate: bag-of-words matches of their map points (SearchByBoW), RANSAC
 //     (slam/sim3_solver.h), guided matching (SearchBySim3), refinement (optim::OptimizeSim3),
 //     accepted with >= 20 inliers, then the points of the candidate's covisible keyframes
 //     projected into the current one: >= 40 matches close the loop;
 //  3. correction (slam/loop_correction.h): Sim(3) propagation, point fusion, essential graph;
 //  4. a global bundle adjustment of a copy of the map in a thread of its own, merged when done.
 //
-// ProcessKeyFrame is a synchronous step: System calls it in its loop-closing thread, fed by a
-// bounded queue of keyframes that local mapping has processed, or directly in deterministic mode
-// (where the global bundle adjustment also runs in the caller's thread). Locking: see map/map.h;
-// ProcessKeyFrame holds Map::mutex() for detection, Sim(3) estimation and the whole correction.
-// Scratch state (consistent groups, the last loop, earlier loop edges) lives here.
+// The keyframe database is filled by local mapping (slam/keyframe_database.h), which runs before
+// this on every keyframe. ProcessKeyFrame is a synchronous step: System calls it in its
+// loop-closing thread, fed by a bounded queue of keyframes that local mapping has processed, or
+// directly in deterministic mode (where the global bundle adjustment also runs in the caller's
+// thread). Locking: see map/map.h; ProcessKeyFrame holds Map::mutex() for detection, Sim(3)
+// estimation and the whole correction. Scratch state (consistent groups, the last loop, earlier
+// loop edges) lives here.
 #pragma once
 
 #include <atomic>
@@ -29,25 +31,10 @@
 #include "moslam/camera/pinhole_camera.h"
 #include "moslam/map/map.h"
 #include "moslam/optim/observation.h"
+#include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/loop_correction.h"
 
 namespace moslam::slam {
-
-// Place recognition as loop detection uses it (ORB-SLAM2's KeyFrameDatabase). Called with
-// Map::mutex() held.
-class LoopCandidateSource {
- public:
-  virtual ~LoopCandidateSource() = default;
-  // Bag-of-words similarity of two keyframes in [0, 1].
-  virtual double Score(const map::KeyFrame& a, const map::KeyFrame& b) const = 0;
-  // Keyframes scoring at least min_score against kf (ORB-SLAM2's DetectLoopCandidates); the
-  // loop closer itself drops kf and its covisible keyframes from the answer.
-  virtual std::vector<std::shared_ptr<map::KeyFrame>> DetectLoopCandidates(
-      const std::shared_ptr<map::KeyFrame>& kf, double min_score) = 0;
-  // Called once per processed keyframe, after its query (ORB-SLAM2 adds it to the database
-  // there). May do nothing when the database is filled elsewhere.
-  virtual void Add(const std::shared_ptr<map::KeyFrame>& kf) = 0;
-};
 
 struct LoopCloserOptions {
   bool fix_scale = true;  // stereo/RGB-D: SE(3) loop transforms; false: Sim(3) (monocular)
@@ -75,7 +62,7 @@ struct LoopCloserStats {
 class LoopCloser {
  public:
   LoopCloser(map::Map* map, const camera::PinholeCamera& camera, double bf,
-             LoopCandidateSource* candidates, const LoopCloserOptions& options);
+             KeyFrameDatabase* database, const LoopCloserOptions& options);
   ~LoopCloser();  // waits for a running global bundle adjustment
 
   // Returns true when this keyframe closed a loop.
@@ -96,7 +83,7 @@ class LoopCloser {
   map::Map* map_;
   camera::PinholeCamera camera_;
   optim::CameraModel model_;
-  LoopCandidateSource* candidates_;
+  KeyFrameDatabase* database_;
   LoopCloserOptions options_;
   struct ConsistentGroup {
     std::set<uint64_t> keyframes;

@@ -19,10 +19,13 @@
 #include "moslam/feature/frame.h"
 #include "moslam/feature/orb_extractor.h"
 #include "moslam/map/map.h"
+#include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/local_mapper.h"
+#include "moslam/slam/loop_closer.h"
 #include "moslam/slam/tracker.h"
 #include "moslam/util/bounded_queue.h"
 #include "moslam/util/error.h"
+#include "moslam/vocab/vocabulary.h"
 
 namespace moslam::slam {
 
@@ -68,6 +71,14 @@ cv::Mat ToGrey(const cv::Mat& image, bool rgb) {
   return grey;
 }
 
+// The vocabulary of the options (given, loaded from the path, or none).
+std::shared_ptr<const vocab::Vocabulary> LoadVocabulary(const SystemOptions& options) {
+  if (options.vocabulary) return options.vocabulary;
+  if (options.vocabulary_path.empty()) return nullptr;
+  return std::make_shared<const vocab::Vocabulary>(
+      vocab::Vocabulary::Load(options.vocabulary_path));
+}
+
 double MsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -84,8 +95,23 @@ class System::Impl : public KeyFrameSink {
         right_extractor_(ExtractorOptions(options.settings)),
         queue_(static_cast<size_t>(options.keyframe_queue_capacity)),
         mapper_(&map_, camera_, options.settings.bf, MapperOptions(options)),
-        tracker_(&map_, camera_, options.settings.bf, TrackerOpts(options), this) {
+        tracker_(&map_, camera_, options.settings.bf, TrackerOpts(options), this),
+        vocabulary_(LoadVocabulary(options)) {
+    if (vocabulary_ && !vocabulary_->empty()) {
+      keyframe_database_ = std::make_unique<KeyFrameDatabase>(vocabulary_);
+      mapper_.SetKeyFrameDatabase(keyframe_database_.get());
+      tracker_.SetKeyFrameDatabase(keyframe_database_.get());
+      map_.SetKeyFrameEraseListener(
+          [db = keyframe_database_.get()](const map::KeyFrame& kf) { db->Erase(kf); });
+      if (options_.loop_closing) {
+        loop_closer_ = std::make_unique<LoopCloser>(&map_, camera_, options.settings.bf,
+                                                    keyframe_database_.get(), LoopOptions(options));
+      }
+    }
     if (!options_.deterministic) mapping_thread_ = std::thread([this] { MappingLoop(); });
+    if (!options_.deterministic && loop_closer_) {
+      loop_thread_ = std::thread([this] { LoopClosingLoop(); });
+    }
   }
   ~Impl() override { Finish(); }
 
@@ -95,6 +121,13 @@ class System::Impl : public KeyFrameSink {
     m.local_bundle_adjustment = o.local_bundle_adjustment;
     m.far_stereo_as_monocular = o.ba_far_stereo_as_monocular;
     return m;
+  }
+  static LoopCloserOptions LoopOptions(const SystemOptions& o) {
+    LoopCloserOptions l;
+    l.fix_scale = true;  // stereo/RGB-D maps have metric scale
+    l.global_bundle_adjustment = o.loop_global_bundle_adjustment;
+    l.synchronous = o.deterministic;
+    return l;
   }
   static TrackerOptions TrackerOpts(const SystemOptions& o) {
     TrackerOptions t;
@@ -110,7 +143,10 @@ class System::Impl : public KeyFrameSink {
   void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) override {
     // Synchronous in deterministic mode, and after Finish() closed the queue (Track() may still
     // be called then; its keyframes are mapped in the caller's thread).
-    if (options_.deterministic || !queue_.Push(keyframe)) mapper_.ProcessKeyFrame(keyframe);
+    if (options_.deterministic || !queue_.Push(keyframe)) {
+      mapper_.ProcessKeyFrame(keyframe);
+      if (loop_closer_) loop_closer_->ProcessKeyFrame(keyframe);
+    }
   }
 
   FrameReport Track(const FrameInput& input) {
@@ -124,6 +160,8 @@ class System::Impl : public KeyFrameSink {
     report.num_matches = outcome.num_matches;
     report.num_inliers = outcome.num_inliers;
     report.new_keyframe = outcome.new_keyframe;
+    report.relocalized = outcome.relocalized;
+    if (outcome.relocalized) ++relocalizations_;
     report.times.track_ms = outcome.track_ms;
     report.times.local_map_ms = outcome.local_map_ms;
     report.times.keyframe_ms = outcome.keyframe_ms;
@@ -148,6 +186,10 @@ class System::Impl : public KeyFrameSink {
   void Finish() {
     queue_.Close();
     if (mapping_thread_.joinable()) mapping_thread_.join();
+    // Mapping has handed over its last keyframe: drain loop closing, then its global BA.
+    loop_queue_.Close();
+    if (loop_thread_.joinable()) loop_thread_.join();
+    if (loop_closer_) loop_closer_->WaitForGlobalBundleAdjustment();
   }
 
   eval::Trajectory CameraTrajectory() const {
@@ -189,6 +231,12 @@ class System::Impl : public KeyFrameSink {
       summary.map_points = static_cast<int>(map_.points().size());
     }
     summary.lost_frames = lost_frames_;
+    summary.relocalizations = relocalizations_;
+    if (loop_closer_) {
+      const LoopCloserStats loops = loop_closer_->Stats();
+      summary.loops_closed = loops.loops_closed;
+      summary.global_ba_merged = loops.global_ba_merged;
+    }
     const std::vector<double> steps = mapper_.StepTimes();
     summary.mapping_steps = static_cast<int>(steps.size());
     for (double ms : steps) summary.mapping_ms_total += ms;
@@ -216,7 +264,14 @@ class System::Impl : public KeyFrameSink {
       mapping_busy_ = true;
       mapper_.ProcessKeyFrame(*keyframe, [this] { return queue_.size() > 0; });
       mapping_busy_ = false;
+      // Loop closing after local mapping (ORB-SLAM2's InsertKeyFrame into LoopClosing); blocks
+      // when the loop closer is 16 keyframes behind, which only a long correction causes.
+      if (loop_closer_ && !loop_queue_.Push(*keyframe)) loop_closer_->ProcessKeyFrame(*keyframe);
     }
+  }
+
+  void LoopClosingLoop() {
+    while (auto keyframe = loop_queue_.Pop()) loop_closer_->ProcessKeyFrame(*keyframe);
   }
 
   const SystemOptions options_;
@@ -228,9 +283,19 @@ class System::Impl : public KeyFrameSink {
   BoundedQueue<std::shared_ptr<map::KeyFrame>> queue_;
   LocalMapper mapper_;
   Tracker tracker_;
+  // Bag of words (SystemOptions::vocabulary): shared, immutable; null without a vocabulary. The
+  // database is guarded by the map mutex (keyframe_database.h).
+  std::shared_ptr<const vocab::Vocabulary> vocabulary_;
+  std::unique_ptr<KeyFrameDatabase> keyframe_database_;
   std::atomic<bool> mapping_busy_{false};
   std::thread mapping_thread_;
+  // Keyframes local mapping has processed, for loop closing (null without a vocabulary or with
+  // SystemOptions::loop_closing off). Declared after the database it uses.
+  BoundedQueue<std::shared_ptr<map::KeyFrame>> loop_queue_{16};
+  std::unique_ptr<LoopCloser> loop_closer_;
+  std::thread loop_thread_;
   int lost_frames_ = 0;
+  int relocalizations_ = 0;
 };
 
 System::System(const SystemOptions& options) : impl_(std::make_unique<Impl>(options)) {}

@@ -21,6 +21,10 @@
 #include "moslam/io/orbslam_settings.h"
 #include "moslam/io/sequence.h"
 
+namespace moslam::vocab {
+class Vocabulary;
+}  // namespace moslam::vocab
+
 namespace moslam::slam {
 
 struct SystemOptions {
@@ -34,6 +38,21 @@ struct SystemOptions {
   bool local_bundle_adjustment = true;
   // LocalMapperOptions::far_stereo_as_monocular (default off, as ORB-SLAM2).
   bool ba_far_stereo_as_monocular = false;
+  // Bag-of-words vocabulary (vocab::Vocabulary::Load: this project's binary format or
+  // ORB-SLAM2's ORBvoc.txt), loaded once at construction; it enables the keyframe database and
+  // relocalization (loop closing uses it too). Empty: no vocabulary, no relocalization (a lost
+  // tracker keeps trying its reference keyframe).
+  std::string vocabulary_path;
+  // An already loaded (or trained) vocabulary; takes precedence over vocabulary_path. Shared, so
+  // several systems or tests load it once.
+  std::shared_ptr<const vocab::Vocabulary> vocabulary;
+  // Loop closing (slam/loop_closer.h) in its own thread, fed by local mapping; needs a vocabulary
+  // (without one it is off whatever this says). Default on, as ORB-SLAM2; off to measure what it
+  // contributes (moslam run --no-loop-closing).
+  bool loop_closing = true;
+  // The full bundle adjustment after each closed loop
+  // (LoopCloserOptions::global_bundle_adjustment).
+  bool loop_global_bundle_adjustment = true;
   void Check() const;  // InputError naming the field
 };
 
@@ -66,6 +85,7 @@ struct FrameReport {
   int num_matches = 0;   // matches from motion-model / reference-keyframe tracking
   int num_inliers = 0;   // map points tracked after local-map pose optimization
   bool new_keyframe = false;
+  bool relocalized = false;  // the pose came from relocalization after tracking was lost
   StageTimes times;
   std::optional<geometry::SE3> T_world_cam;  // when tracking is ok (or just initialized)
 };
@@ -74,6 +94,9 @@ struct MapSummary {
   int keyframes = 0;
   int map_points = 0;
   int lost_frames = 0;
+  int relocalizations = 0;         // frames relocalized (FrameReport::relocalized)
+  int loops_closed = 0;            // loop corrections (LoopCloserStats)
+  int global_ba_merged = 0;        // full bundle adjustments after a loop, written back
   int mapping_steps = 0;           // keyframes processed by local mapping
   double mapping_ms_median = 0.0;  // per processed keyframe
   double mapping_ms_total = 0.0;

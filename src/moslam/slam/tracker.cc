@@ -10,6 +10,7 @@
 
 #include "moslam/feature/matcher.h"
 #include "moslam/slam/frame_pose.h"
+#include "moslam/slam/relocalizer.h"
 #include "moslam/util/check.h"
 
 namespace moslam::slam {
@@ -30,6 +31,9 @@ constexpr int kMinMotionModelMatches = 20;
 constexpr int kMinTrackingMatches = 10;
 constexpr int kMinReferenceMatches = 15;
 constexpr int kMaxLocalKeyFrames = 80;
+// Local-map inliers needed in the first max_frames_between_keyframes frames after a
+// relocalization (ORB-SLAM2's TrackLocalMap).
+constexpr int kMinInliersAfterRelocalization = 50;
 
 }  // namespace
 
@@ -51,6 +55,7 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
   current_.points.assign(n, nullptr);
   current_.outlier.assign(n, false);
   ++frames_since_keyframe_;
+  ++frames_since_relocalization_;
 
   if (!initialized_) {
     const auto t0 = Clock::now();
@@ -81,14 +86,20 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
     RefreshLastFrame();
+    // Lost with a keyframe database: only relocalization, as ORB-SLAM2.
+    const bool relocalize_only = database_ && !last_ok_;
     if (have_velocity_ && last_ok_) {
       out.num_matches = TrackWithMotionModel();
       ok = out.num_matches >= kMinTrackingMatches;
     }
-    if (!ok) {
+    if (!ok && !relocalize_only) {
       out.num_matches = TrackReferenceKeyFrame();
       ok = out.num_matches >= kMinTrackingMatches;
       if (!ok) out.reason = "too few matches with the motion model and the reference keyframe";
+    }
+    if (!ok && database_) {
+      ok = Relocalize(&out);
+      if (!ok) out.reason = "relocalization failed";
     }
   }
   out.track_ms = MsSince(t0);
@@ -97,19 +108,26 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
     std::lock_guard<std::mutex> lock(map_->mutex());
     out.num_inliers = TrackLocalMap();
     last_inliers_ = out.num_inliers;
-    ok = out.num_inliers >= options_.min_inliers;
+    const bool recently_relocalized =
+        frames_since_relocalization_ < static_cast<uint64_t>(options_.max_frames_between_keyframes);
+    ok = out.num_inliers >= (recently_relocalized
+                                 ? std::max(options_.min_inliers, kMinInliersAfterRelocalization)
+                                 : options_.min_inliers);
     if (!ok) out.reason = "too few inliers after local-map tracking";
     out.local_map_ms = MsSince(t0);
   }
   if (!ok) {
     out.status = TrackStatus::kLost;
+    out.relocalized = false;
     RecordPose(false);
     last_ok_ = false;
     have_velocity_ = false;
     return out;
   }
   velocity_ = current_.T_cam_world * last_.T_cam_world.Inverse();
-  have_velocity_ = true;
+  // After a relocalization the last frame is a lost one: no motion model until the next frame
+  // (ORB-SLAM2 tracks the reference keyframe up to mnLastRelocFrameId + 1).
+  have_velocity_ = !out.relocalized;
 
   t0 = Clock::now();
   std::shared_ptr<map::KeyFrame> keyframe;
@@ -260,6 +278,24 @@ int Tracker::TrackReferenceKeyFrame() {
   current_.T_cam_world = last_.T_cam_world;
   OptimizeCurrentPose();
   return DiscardOutliers();
+}
+
+bool Tracker::Relocalize(TrackOutcome* out) {
+  // The BoW needs no lock, but this runs inside the tracking step's lock scope; transforming
+  // ~1000 descriptors takes about a millisecond.
+  const KeyFrameBow bow = database_->ComputeBow(current_.frame.descriptors);
+  RelocalizerOptions options;
+  options.num_threads = options_.num_threads;
+  const RelocalizationResult r = slam::Relocalize(*database_, current_.frame, bow, model_, options);
+  if (!r.success) return false;
+  current_.T_cam_world = r.T_cam_world;
+  current_.points = r.points;
+  std::fill(current_.outlier.begin(), current_.outlier.end(), false);
+  reference_ = r.keyframe;
+  frames_since_relocalization_ = 0;
+  out->num_matches = r.num_inliers;
+  out->relocalized = true;
+  return true;
 }
 
 int Tracker::OptimizeCurrentPose() {
@@ -414,6 +450,9 @@ void Tracker::SearchLocalPoints() {
 bool Tracker::NeedNewKeyFrame() const {
   // ORB-SLAM2's Tracking::NeedNewKeyFrame for stereo / RGB-D.
   const size_t num_keyframes = map_->keyframes().size();
+  // No keyframe just after a relocalization (unless the map is still small).
+  const auto max_frames = static_cast<uint64_t>(options_.max_frames_between_keyframes);
+  if (frames_since_relocalization_ < max_frames && num_keyframes > max_frames) return false;
   const int min_obs = num_keyframes <= 2 ? 2 : 3;
   const int ref_matches = reference_->TrackedMapPoints(min_obs);
   const bool idle = sink_->MappingIdle();

@@ -22,6 +22,7 @@
 #include "moslam/geometry/se3.h"
 #include "moslam/map/map.h"
 #include "moslam/optim/observation.h"
+#include "moslam/slam/keyframe_database.h"
 
 namespace moslam::slam {
 
@@ -53,6 +54,7 @@ struct TrackOutcome {
   int num_matches = 0;
   int num_inliers = 0;
   bool new_keyframe = false;
+  bool relocalized = false;  // the pose came from relocalization (slam/relocalizer.h)
   geometry::SE3 T_cam_world;
   double track_ms = 0.0, local_map_ms = 0.0, keyframe_ms = 0.0;
 };
@@ -63,6 +65,13 @@ class Tracker {
           const TrackerOptions& options, KeyFrameSink* sink);
 
   TrackOutcome Track(feature::Frame frame);
+
+  // Enables relocalization (ORB-SLAM2's Tracking::Relocalization, slam/relocalizer.h): when the
+  // motion model and the reference keyframe both fail, and on every frame while lost, the frame
+  // is relocalized against the database's candidates. nullptr (the default): no relocalization;
+  // a lost tracker keeps trying the reference keyframe. The database must outlive the tracker
+  // and is read under Map::mutex().
+  void SetKeyFrameDatabase(const KeyFrameDatabase* database) { database_ = database; }
 
   // Per processed frame: its reference keyframe and the pose relative to it (ORB-SLAM2's
   // mlRelativeFramePoses), or no keyframe when the frame was lost / before initialization.
@@ -85,6 +94,7 @@ class Tracker {
   void RefreshLastFrame();
   int TrackWithMotionModel();
   int TrackReferenceKeyFrame();
+  bool Relocalize(TrackOutcome* out);
   int OptimizeCurrentPose();
   int DiscardOutliers();
   int TrackLocalMap();
@@ -116,6 +126,9 @@ class Tracker {
   std::vector<std::shared_ptr<map::KeyFrame>> local_keyframes_;
   std::vector<std::shared_ptr<map::MapPoint>> local_points_;
   std::vector<FramePose> frame_poses_;
+  const KeyFrameDatabase* database_ = nullptr;
+  // Frames since the last relocalization (ORB-SLAM2's mnLastRelocFrameId); "never" at start.
+  uint64_t frames_since_relocalization_ = UINT64_MAX / 2;
 };
 
 }  // namespace moslam::slam

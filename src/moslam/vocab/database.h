@@ -6,6 +6,7 @@
 // Not thread-safe: the owner serializes access (slam/ holds it under the map mutex).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <unordered_map>
 #include <utility>
@@ -24,7 +25,8 @@ struct QueryResult {
 class Database {
  public:
   void Add(uint64_t id, const BowVector& bow);
-  // Removes every posting of `id` (bow must be the vector it was added with).
+  // Removes every posting of `id`; the stored vector is used, so `bow` only documents intent.
+  // Erasing an unknown id does nothing. Adding an id again replaces its entry.
   void Erase(uint64_t id, const BowVector& bow);
   void Clear();
   size_t size() const { return bows_.size(); }
@@ -34,6 +36,7 @@ class Database {
   std::vector<std::pair<uint64_t, int>> SharingWords(const BowVector& query) const;
   // The `max_results` best entries by score (ties: lower id first), among those sharing at
   // least `min_shared_fraction` of the best entry's shared-word count (ORB-SLAM2 uses 0.8).
+  // max_results < 0: all of them.
   std::vector<QueryResult> Query(const BowVector& query, int max_results,
                                  double min_shared_fraction = 0.0) const;
 
