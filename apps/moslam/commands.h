@@ -12,5 +12,6 @@ void AddFeaturesCommand(CLI::App& app);
 void AddCrfCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddSynthCommand(CLI::App& app);
+void AddVocabCommand(CLI::App& app);
 
 }  // namespace moslam::app

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   moslam::app::AddCrfCommand(app);
   moslam::app::AddRunCommand(app);
   moslam::app::AddSynthCommand(app);
+  moslam::app::AddVocabCommand(app);
 
   try {
     app.parse(argc, argv);
