@@ -36,6 +36,7 @@ struct RunArgs {
   size_t queue = 4;
   bool realtime = false;
   bool deterministic = false;
+  bool monocular = false;
   bool quiet = false;
   std::string vocabulary;  // empty: none (no relocalization, no loop closing)
   bool no_loop_closing = false;
@@ -107,6 +108,7 @@ void Run(const RunArgs& args) {
   // The settings are read first: an image folder takes its frame rate from Camera.fps.
   io::DatasetOptions dataset_options;
   dataset_options.format = *format;
+  dataset_options.monocular = args.monocular;
   io::Sequence sequence;
   io::OrbSlamSettings settings;
   if (*format == io::DatasetFormat::kImageFolder) {
@@ -199,6 +201,9 @@ void AddRunCommand(CLI::App& app) {
                     "Pace frames by their timestamps instead of running as fast as possible");
   command->add_flag("--deterministic", args->deterministic,
                     "Fixed seeds, local mapping synchronous in the tracking thread");
+  command->add_flag("--monocular", args->monocular,
+                    "Monocular SLAM on the left / colour images only, ignoring right images and "
+                    "depth (a KITTI folder without image_1 is monocular anyway)");
   command->add_flag("--quiet", args->quiet, "No progress line and only warnings in the log");
   command->add_option("--vocabulary", args->vocabulary,
                       "ORB vocabulary (moslam binary or ORB-SLAM2's ORBvoc.txt): enables "

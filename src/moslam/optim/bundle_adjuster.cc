@@ -107,6 +107,18 @@ class Stage {
   ceres::HuberLoss huber_mono_{std::sqrt(options_.chi2_mono)};
   ceres::HuberLoss huber_stereo_{std::sqrt(options_.chi2_stereo)};
   SE3LeftManifold manifold_;
+  // Ends the solve when BundleAdjusterOptions::stop is set (Ceres runs it after every iteration).
+  class StopCallback : public ceres::IterationCallback {
+   public:
+    explicit StopCallback(const std::atomic<bool>* stop) : stop_(stop) {}
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+      return stop_ && stop_->load() ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+    }
+
+   private:
+    const std::atomic<bool>* stop_;
+  };
+  mutable StopCallback stop_callback_{options_.stop};
 };
 
 int Stage::Run(const std::vector<bool>& active, bool robust, int iterations) {
@@ -162,6 +174,7 @@ ceres::Solver::Options Stage::SolverOptions(int iterations, int free_poses, int 
                                             const std::vector<double*>& pose_blocks,
                                             const std::vector<double*>& point_blocks) const {
   ceres::Solver::Options options = QuietSolverOptions(iterations, options_.num_threads);
+  if (options_.stop) options.callbacks.push_back(&stop_callback_);
   if (free_poses == 0 || free_points == 0) {
     // Nothing to eliminate (or nothing left after elimination): the normal equations are block
     // diagonal or small.
@@ -224,7 +237,9 @@ BundleResult AdjustBundle(const BundleProblem& problem, const BundleAdjusterOpti
   result.iterations = stage.Run(active, options.robust, options.iterations_first);
   std::vector<double> chi2 = EdgeChiSquares(problem, state);
   for (size_t e = 0; e < num_edges; ++e) active[e] = chi2[e] <= threshold(e);
-  result.iterations += stage.Run(active, false, options.iterations_second);
+  if (!(options.stop && options.stop->load())) {
+    result.iterations += stage.Run(active, false, options.iterations_second);
+  }
   chi2 = EdgeChiSquares(problem, state);
   for (size_t e = 0; e < num_edges; ++e) result.edge_inlier[e] = chi2[e] <= threshold(e);
 

@@ -6,6 +6,7 @@
 // observations from the map. Ceres with analytic Jacobians (checked numerically in tests).
 #pragma once
 
+#include <atomic>
 #include <vector>
 
 #include <Eigen/Core>
@@ -41,6 +42,11 @@ struct BundleAdjusterOptions {
   // always sparse, which optim_benchmark measured as fast as or slightly faster than dense even
   // for a local BA's 7 free keyframes (94 vs 101 ms CPU, 10k edges).
   int dense_schur_max_poses = 0;
+  // ORB-SLAM2's abort flag (mbAbortBA): when another thread sets it, the solver stops after its
+  // current iteration, the second stage is skipped, and the result so far is returned (edges are
+  // still classified). Monocular tracking sets it to get a keyframe into a busy local mapper.
+  // Not owned; may be null.
+  const std::atomic<bool>* stop = nullptr;
   void Check() const;  // InputError naming the field
 };
 

@@ -1,5 +1,6 @@
 #include "moslam/optim/bundle_adjuster.h"
 
+#include <atomic>
 #include <random>
 #include <utility>
 
@@ -199,6 +200,30 @@ TEST(AdjustBundle, DeterministicWithOneThread) {
   const BundleResult c = AdjustBundle(scene.problem, threads);
   EXPECT_EQ(c.edge_inlier, a.edge_inlier);
   EXPECT_NEAR(c.final_cost, a.final_cost, 1e-6 * a.final_cost);
+}
+
+// A stop flag that is already set ends both stages before any step: the input comes back, and
+// the edges are still classified (ORB-SLAM2's aborted local BA).
+TEST(AdjustBundle, StopFlagEndsTheSolve) {
+  std::mt19937 rng(37);
+  const test::BundleScene scene = test::MakeBundleScene(rng, 5, 1, 200, 0.7, 0.0, 0.05);
+  std::atomic<bool> stop{true};
+  BundleAdjusterOptions options;
+  options.stop = &stop;
+  const BundleResult stopped = AdjustBundle(scene.problem, options);
+  EXPECT_LE(stopped.iterations, 1);  // Ceres counts its initial evaluation (iteration 0)
+  for (size_t i = 0; i < scene.problem.T_cam_world.size(); ++i) {
+    EXPECT_EQ(stopped.T_cam_world[i].translation(), scene.problem.T_cam_world[i].translation());
+  }
+  EXPECT_EQ(stopped.points_world, scene.problem.points_world);
+  EXPECT_EQ(stopped.edge_inlier.size(), scene.problem.edges.size());
+  // Not set: the flag changes nothing.
+  stop = false;
+  const BundleResult a = AdjustBundle(scene.problem, options);
+  const BundleResult b = AdjustBundle(scene.problem);
+  EXPECT_GT(a.iterations, 0);
+  EXPECT_EQ(a.points_world, b.points_world);
+  EXPECT_EQ(a.final_cost, b.final_cost);
 }
 
 // The sparse reduced-camera solver finds the same optimum as the dense one.

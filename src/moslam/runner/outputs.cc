@@ -168,6 +168,8 @@ std::optional<RunAte> EvaluateRun(const io::Sequence& sequence, const std::strin
     std::error_code ec;
     if (!pair.gt.has_timestamps() && fs::exists(times, ec)) eval::AttachTimes(times, &pair.gt);
     eval::EvalRequest request;  // `moslam eval ate`'s defaults: tum convention, se3 alignment
+    // Monocular scale is arbitrary: align with a similarity (evo -as).
+    if (sequence.sensor == io::SensorType::kMonocular) request.alignment = "sim3";
     const eval::AteOptions options = eval::MakeAteOptions(request, pair);
     RunAte ate{eval::ComputeAte(pair.gt, pair.est, options), {}, {}};
     ate.json = eval::AteToJson(ate.result, pair.gt, pair.est);

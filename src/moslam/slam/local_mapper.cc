@@ -70,7 +70,9 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
       database_->Add(keyframe);
     }
     CullRecentPoints(keyframe);
-    search = PrepareTriangulationSearch(keyframe, camera_);
+    NewPointsOptions new_points;
+    new_points.num_neighbours = options_.monocular ? 20 : 10;
+    search = PrepareTriangulationSearch(keyframe, camera_, new_points);
   }
   RunTriangulationSearch(&search, camera_);  // on a snapshot, without the lock
   {
@@ -81,8 +83,9 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
   }
   if (!busy()) {
     std::lock_guard<std::mutex> lock(map_->mutex());
-    SearchInNeighbors(map_, keyframe, camera_);
+    SearchInNeighbors(map_, keyframe, camera_, options_.monocular ? 20 : 10);
   }
+  abort_ba_ = false;  // a request from before this keyframe's adjustment is void (ORB-SLAM2)
   if (!busy() && options_.local_bundle_adjustment) LocalBundleAdjustment(keyframe);
   if (options_.keyframe_culling) {
     std::lock_guard<std::mutex> lock(map_->mutex());
@@ -121,13 +124,15 @@ void LocalMapper::InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe)
 }
 
 void LocalMapper::CullRecentPoints(const std::shared_ptr<map::KeyFrame>& keyframe) {
-  // ORB-SLAM2's MapPointCulling (stereo: at least 3 observations after two keyframes).
+  // ORB-SLAM2's MapPointCulling: two keyframes after its creation a point seen by at most
+  // cnThObs keyframes is erased (cnThObs: 3 stereo / RGB-D, 2 monocular).
+  const int max_obs_culled = options_.monocular ? 2 : 3;
   std::vector<std::weak_ptr<map::MapPoint>> kept;
   for (const auto& weak : recent_points_) {
     auto p = weak.lock();
     if (!p || p->bad) continue;
     const uint64_t age = keyframe->id - std::min(keyframe->id, p->first_keyframe_id);
-    if (p->FoundRatio() < 0.25f || (age >= 2 && p->num_observations() <= 3)) {
+    if (p->FoundRatio() < 0.25f || (age >= 2 && p->num_observations() <= max_obs_culled)) {
       map_->EraseMapPoint(p);
     } else if (age < 3) {
       kept.push_back(p);
@@ -202,6 +207,7 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
   }
   optim::BundleAdjusterOptions options;
   options.num_threads = options_.num_threads;
+  options.stop = &abort_ba_;
   const optim::BundleResult result = optim::AdjustBundle(problem, options);
 
   int outliers = 0;

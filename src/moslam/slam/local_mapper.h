@@ -11,6 +11,7 @@
 // and points erased in between (map/map.h). Scratch state (the recent-points list) lives here.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -38,6 +39,9 @@ struct LocalMapperOptions {
   bool far_stereo_as_monocular = false;
   bool keyframe_culling = true;
   int num_threads = 1;  // Ceres threads in bundle adjustment
+  // Monocular keyframes (ORB-SLAM2's monocular settings): 20 neighbours for triangulation and
+  // fusion instead of 10, and recent points culled with 2 observations instead of 3.
+  bool monocular = false;
 };
 
 // Stereo/RGB-D bundle adjustment is defined up to a rigid motion of everything (gauge freedom);
@@ -62,6 +66,10 @@ class LocalMapper {
   // database must outlive the mapper; call before the first ProcessKeyFrame.
   void SetKeyFrameDatabase(KeyFrameDatabase* database) { database_ = database; }
 
+  // ORB-SLAM2's InterruptBA: a running local bundle adjustment stops after its current iteration
+  // (thread-safe; the flag is cleared when the next adjustment starts).
+  void InterruptBundleAdjustment() { abort_ba_ = true; }
+
   // Milliseconds per processed keyframe (thread-safe copy).
   std::vector<double> StepTimes() const;
 
@@ -76,6 +84,7 @@ class LocalMapper {
   LocalMapperOptions options_;
   KeyFrameDatabase* database_ = nullptr;
   std::vector<std::weak_ptr<map::MapPoint>> recent_points_;
+  std::atomic<bool> abort_ba_{false};
   mutable std::mutex stats_mutex_;
   std::vector<double> step_ms_;
 };

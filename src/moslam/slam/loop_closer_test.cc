@@ -92,11 +92,14 @@ TEST(LoopCloser, ClosesTheLoopRoomAndCutsDrift) {
   EXPECT_EQ(off.summary.loops_closed, 0);
   EXPECT_GE(on.summary.loops_closed, 1);
   EXPECT_EQ(on.frames_ok, static_cast<int>(on.reports.size()));
-  // The bound: after a lap the uncorrected camera carries the whole accumulated drift, while a
-  // closed loop ties the end to the start, leaving only the local error (the depth noise's
-  // centimetre-level floor). Five times is the bar.
+  // The bound: after 2.5 laps (15.7 m) the uncorrected camera carries the whole accumulated
+  // drift (measured 0.28 m end-point, 6.1 cm ATE on seed 1), while the closed loop ties the map
+  // to its start and later laps track against it, leaving only the depth noise's sub-centimetre
+  // local error (measured 0.57 cm end-point, 0.65 cm ATE). Five times is the bar; the
+  // end-point drift clears it by a wide margin on the seeds measured (docs/EVALUATION.md), the
+  // ATE (drift averaged over the whole walk, SE(3)-aligned) must at least halve.
   EXPECT_GT(drift_off, 5.0 * drift_on);
-  EXPECT_LT(on.ate_rmse, off.ate_rmse);
+  EXPECT_LT(2.0 * on.ate_rmse, off.ate_rmse);
 }
 
 }  // namespace

@@ -121,6 +121,16 @@ std::vector<std::pair<size_t, size_t>> SearchForTriangulation(
     y2.push_back(kps2[i2].pt.y);
     tolerance2.push_back(3.84 * frame2.level_sigma2[kps2[i2].octave]);
   }
+  // Monocular pairs: keypoints of frame2 near the epipole (where frame1's centre projects) are
+  // skipped: their rays are nearly parallel to the baseline, so depth is ill-conditioned
+  // (ORB-SLAM2's SearchForTriangulation, which tests it for keypoints without stereo; applied here
+  // only between monocular frames so stereo / RGB-D results are unchanged).
+  const bool mono_pair = frame1.bf <= 0.0 && frame2.bf <= 0.0;
+  const Eigen::Vector3d c1_in_2 = T_cam2_world * T_cam1_world.Inverse().translation();
+  const bool epipole_visible = mono_pair && c1_in_2.z() > 0.0;
+  const Eigen::Vector2d epipole = epipole_visible
+                                      ? Eigen::Vector2d((cam.K() * c1_in_2).hnormalized())
+                                      : Eigen::Vector2d::Zero();
   std::vector<bool> used2(kps2.size(), false);
   std::vector<size_t> band;
   std::vector<std::pair<size_t, size_t>> matches;
@@ -142,6 +152,10 @@ std::vector<std::pair<size_t, size_t>> SearchForTriangulation(
     for (size_t k : band) {
       const size_t i2 = free2[k];
       if (used2[i2]) continue;
+      if (epipole_visible && (Eigen::Vector2d(x2[k], y2[k]) - epipole).squaredNorm() <
+                                 100.0 * frame2.scale_factors[kps2[i2].octave]) {
+        continue;
+      }
       const int dist = feature::DescriptorDistance(frame1.descriptor(i1), frame2.descriptor(i2));
       if (dist >= best_dist) continue;
       best_dist = dist;
@@ -188,6 +202,12 @@ TriangulationSearch PrepareTriangulationSearch(const std::shared_ptr<map::KeyFra
     // Too short a baseline adds nothing over the stereo depth (ORB-SLAM2).
     const double baseline = (kf2->CameraCenter() - kf->CameraCenter()).norm();
     if (stereo_baseline > 0.0 && baseline < stereo_baseline) continue;
+    // Monocular: a baseline under 1 % of the neighbour's median scene depth triangulates nothing
+    // reliable (ORB-SLAM2's ratioBaselineDepth).
+    if (stereo_baseline <= 0.0) {
+      const double median_depth = kf2->MedianDepth();
+      if (median_depth <= 0.0 || baseline / median_depth < 0.01) continue;
+    }
     search.neighbours.push_back({kf2, kf2->T_cam_world(), FreeSlots(*kf2), {}});
   }
   return search;

@@ -1,14 +1,17 @@
 // Test and tool support (not used by the library): runs slam::System over a data-set folder and
-// scores the camera trajectory against the ground truth with the TUM-convention ATE (SE(3)
-// alignment). apps/moslam's `run` command is the user-facing path; this is the small loop the
-// end-to-end tests and tools/slam_eval need.
+// scores the camera and keyframe trajectories against the ground truth with the TUM-convention
+// ATE (SE(3) alignment; Sim(3) for monocular runs, whose scale is arbitrary). apps/moslam's `run`
+// command is the user-facing path; this is the small loop the end-to-end tests and tools/slam_eval
+// need.
 #pragma once
 
 #include <time.h>
 
 #include <algorithm>
+#include <chrono>
 #include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "moslam/eval/ate.h"
@@ -35,7 +38,9 @@ struct DatasetRun {
   eval::Trajectory estimate;
   MapSummary summary;
   int frames_ok = 0;
-  double ate_rmse = -1.0;        // metres; < 0 without ground truth
+  double ate_rmse = -1.0;           // metres, camera trajectory; < 0 without ground truth
+  double keyframe_ate_rmse = -1.0;  // metres, keyframe trajectory; < 0 without ground truth
+  eval::Trajectory keyframes;
   double track_ms_median = 0.0;  // FrameReport::times.total_ms (wall clock)
   // CPU time of the calling (tracking) thread per Track() call: on a machine shared with other
   // jobs, the wall clock counts time spent waiting for a core; this does not.
@@ -51,11 +56,15 @@ inline double ThreadCpuMs() {
 // `max_frames` <= 0: all frames. `mask_folder`: when set, each frame's movable-object mask is
 // read from the image path with its "rgb" (or "image_0") folder replaced by this one (the
 // layout of `moslam synth`: rgb/<stamp>.png -> moving/<stamp>.png). `adjust` (may be empty) edits
-// the SystemOptions before the run (experiments: local BA off, ...).
+// the SystemOptions before the run (experiments: local BA off, ...). `realtime`: frames are
+// handed over no faster than their timestamps, as a camera would (ORB-SLAM2's examples wait the
+// same way), so threaded local mapping gets the time a live run gives it; without it frames come
+// as fast as tracking takes them, which starves mapping on a loaded machine.
 inline DatasetRun RunDataset(const std::string& folder, const std::string& settings_path,
                              bool deterministic, int max_frames = 0,
                              const std::string& mask_folder = "",
-                             const std::function<void(SystemOptions*)>& adjust = {}) {
+                             const std::function<void(SystemOptions*)>& adjust = {},
+                             bool realtime = false) {
   const io::Sequence sequence = io::ReadDataset(folder);
   SystemOptions options;
   options.sensor = sequence.sensor;
@@ -68,8 +77,14 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
     System system(options);
     const size_t n =
         max_frames > 0 ? std::min<size_t>(max_frames, sequence.size()) : sequence.size();
+    const auto start = std::chrono::steady_clock::now();
     for (size_t i = 0; i < n; ++i) {
       const io::FrameEntry& entry = sequence.frames[i];
+      if (realtime) {
+        const double offset_s = entry.timestamp - sequence.frames[0].timestamp;
+        std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                  std::chrono::duration<double>(offset_s)));
+      }
       const io::FrameImages images =
           io::LoadFrameImages(entry, io::ColourMode::kGrey, options.settings.depth_map_factor);
       FrameInput input;
@@ -86,6 +101,7 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
     }
     system.Finish();
     run.estimate = system.CameraTrajectory();
+    run.keyframes = system.KeyFrameTrajectory();
     run.summary = system.Summary();
   }
   run.track_ms_median = eval::Median(total_ms);
@@ -100,9 +116,15 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
         gt.timestamps.push_back(sequence.frames[k].timestamp);
       }
     }
-    const eval::AteResult ate =
-        eval::ComputeAte(gt, run.estimate, eval::AteOptions::Defaults(eval::Convention::kTum));
-    run.ate_rmse = ate.translation.stats.rmse;
+    eval::AteOptions ate_options = eval::AteOptions::Defaults(eval::Convention::kTum);
+    if (options.sensor == io::SensorType::kMonocular) {
+      ate_options.alignment = eval::AlignmentMode::kSim3;
+    }
+    run.ate_rmse = eval::ComputeAte(gt, run.estimate, ate_options).translation.stats.rmse;
+    if (run.keyframes.size() >= 3) {
+      run.keyframe_ate_rmse =
+          eval::ComputeAte(gt, run.keyframes, ate_options).translation.stats.rmse;
+    }
   }
   return run;
 }

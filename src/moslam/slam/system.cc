@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <utility>
 
@@ -42,8 +43,9 @@ const char* ToString(TrackingState state) {
 }
 
 void SystemOptions::Check() const {
-  if (sensor != io::SensorType::kStereo && sensor != io::SensorType::kRgbD) {
-    throw InputError("SystemOptions.sensor: only stereo and rgbd are supported (got " +
+  if (sensor != io::SensorType::kStereo && sensor != io::SensorType::kRgbD &&
+      sensor != io::SensorType::kMonocular) {
+    throw InputError("SystemOptions.sensor: only stereo, rgbd and monocular are supported (got " +
                      std::string(io::ToString(sensor)) + ")");
   }
   if (keyframe_queue_capacity < 1) {
@@ -54,9 +56,11 @@ void SystemOptions::Check() const {
 
 namespace {
 
-feature::OrbExtractorOptions ExtractorOptions(const io::OrbSlamSettings& settings) {
+feature::OrbExtractorOptions ExtractorOptions(const io::OrbSlamSettings& settings,
+                                              int feature_factor = 1) {
   feature::OrbExtractorOptions options;
   options.ApplySettings(settings.orb);
+  options.num_features *= feature_factor;
   return options;
 }
 
@@ -90,12 +94,14 @@ class System::Impl : public KeyFrameSink {
   explicit Impl(const SystemOptions& options)
       : options_((options.Check(), options)),
         camera_(options.settings.camera),
-        stereo_camera_(options.settings.camera, options.settings.bf),
+        stereo_camera_(StereoCamera(options)),
         left_extractor_(ExtractorOptions(options.settings)),
         right_extractor_(ExtractorOptions(options.settings)),
+        // ORB-SLAM2 extracts twice the features until a monocular map is initialized.
+        init_extractor_(ExtractorOptions(options.settings, 2)),
         queue_(static_cast<size_t>(options.keyframe_queue_capacity)),
-        mapper_(&map_, camera_, options.settings.bf, MapperOptions(options)),
-        tracker_(&map_, camera_, options.settings.bf, TrackerOpts(options), this),
+        mapper_(&map_, camera_, Bf(options), MapperOptions(options)),
+        tracker_(&map_, camera_, Bf(options), TrackerOpts(options), this),
         vocabulary_(LoadVocabulary(options)) {
     if (vocabulary_ && !vocabulary_->empty()) {
       keyframe_database_ = std::make_unique<KeyFrameDatabase>(vocabulary_);
@@ -104,7 +110,7 @@ class System::Impl : public KeyFrameSink {
       map_.SetKeyFrameEraseListener(
           [db = keyframe_database_.get()](const map::KeyFrame& kf) { db->Erase(kf); });
       if (options_.loop_closing) {
-        loop_closer_ = std::make_unique<LoopCloser>(&map_, camera_, options.settings.bf,
+        loop_closer_ = std::make_unique<LoopCloser>(&map_, camera_, Bf(options),
                                                     keyframe_database_.get(), LoopOptions(options));
       }
     }
@@ -115,8 +121,16 @@ class System::Impl : public KeyFrameSink {
   }
   ~Impl() override { Finish(); }
 
+  static bool Mono(const SystemOptions& o) { return o.sensor == io::SensorType::kMonocular; }
+  // A monocular settings file may have no baseline: no stereo camera then.
+  static std::optional<camera::StereoCamera> StereoCamera(const SystemOptions& o) {
+    if (Mono(o)) return std::nullopt;
+    return camera::StereoCamera(o.settings.camera, o.settings.bf);
+  }
+  static double Bf(const SystemOptions& o) { return Mono(o) ? 0.0 : o.settings.bf; }
   static LocalMapperOptions MapperOptions(const SystemOptions& o) {
     LocalMapperOptions m;
+    m.monocular = Mono(o);
     m.close_depth = o.settings.CloseDepthMetres();
     m.local_bundle_adjustment = o.local_bundle_adjustment;
     m.far_stereo_as_monocular = o.ba_far_stereo_as_monocular;
@@ -124,13 +138,15 @@ class System::Impl : public KeyFrameSink {
   }
   static LoopCloserOptions LoopOptions(const SystemOptions& o) {
     LoopCloserOptions l;
-    l.fix_scale = true;  // stereo/RGB-D maps have metric scale
+    l.fix_scale = !Mono(o);  // stereo/RGB-D maps have metric scale; monocular ones drift in scale
     l.global_bundle_adjustment = o.loop_global_bundle_adjustment;
     l.synchronous = o.deterministic;
     return l;
   }
   static TrackerOptions TrackerOpts(const SystemOptions& o) {
     TrackerOptions t;
+    t.monocular = Mono(o);
+    t.initializer.parallel = !o.deterministic;  // same result either way (fixed seed)
     t.close_depth = o.settings.CloseDepthMetres();
     t.max_frames_between_keyframes = std::max(1, static_cast<int>(o.settings.fps));
     return t;
@@ -140,6 +156,7 @@ class System::Impl : public KeyFrameSink {
     return options_.deterministic || (!mapping_busy_.load() && queue_.size() == 0);
   }
   size_t QueuedKeyFrames() const override { return queue_.size(); }
+  void InterruptMapping() override { mapper_.InterruptBundleAdjustment(); }
   void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) override {
     // Synchronous in deterministic mode, and after Finish() closed the queue (Track() may still
     // be called then; its keyframes are mapped in the caller's thread).
@@ -156,6 +173,8 @@ class System::Impl : public KeyFrameSink {
     report.num_features = static_cast<int>(frame.size());
     report.times.extract_ms = MsSince(t0);
     const TrackOutcome outcome = tracker_.Track(std::move(frame));
+    if (outcome.status == TrackStatus::kInitialized) initialized_frame_ = frame_index_;
+    ++frame_index_;
     report.reason = outcome.reason;
     report.num_matches = outcome.num_matches;
     report.num_inliers = outcome.num_inliers;
@@ -237,6 +256,8 @@ class System::Impl : public KeyFrameSink {
       summary.loops_closed = loops.loops_closed;
       summary.global_ba_merged = loops.global_ba_merged;
     }
+    summary.initialized_frame = initialized_frame_;
+    summary.resets = tracker_.rejected_initializations();
     const std::vector<double> steps = mapper_.StepTimes();
     summary.mapping_steps = static_cast<int>(steps.size());
     for (double ms : steps) summary.mapping_ms_total += ms;
@@ -247,12 +268,17 @@ class System::Impl : public KeyFrameSink {
  private:
   feature::Frame MakeFrame(const FrameInput& input) {
     const cv::Mat grey = ToGrey(input.image, options_.settings.rgb);
+    if (options_.sensor == io::SensorType::kMonocular) {
+      feature::OrbExtractor* extractor =
+          tracker_.initialized() ? &left_extractor_ : &init_extractor_;
+      return feature::MakeMonocularFrame(input.timestamp, grey, input.mask, extractor, camera_);
+    }
     if (options_.sensor == io::SensorType::kStereo) {
       if (input.right.empty())
         throw InputError("FrameInput.right: stereo frame without right image");
       return feature::MakeStereoFrame(input.timestamp, grey,
                                       ToGrey(input.right, options_.settings.rgb), input.mask,
-                                      &left_extractor_, &right_extractor_, stereo_camera_);
+                                      &left_extractor_, &right_extractor_, *stereo_camera_);
     }
     if (input.depth.empty()) throw InputError("FrameInput.depth: RGB-D frame without depth");
     return feature::MakeRgbdFrame(input.timestamp, grey, input.depth, input.mask, &left_extractor_,
@@ -276,9 +302,10 @@ class System::Impl : public KeyFrameSink {
 
   const SystemOptions options_;
   camera::PinholeCamera camera_;
-  camera::StereoCamera stereo_camera_;
+  std::optional<camera::StereoCamera> stereo_camera_;
   feature::OrbExtractor left_extractor_;
   feature::OrbExtractor right_extractor_;
+  feature::OrbExtractor init_extractor_;
   map::Map map_;
   BoundedQueue<std::shared_ptr<map::KeyFrame>> queue_;
   LocalMapper mapper_;
@@ -296,6 +323,8 @@ class System::Impl : public KeyFrameSink {
   std::thread loop_thread_;
   int lost_frames_ = 0;
   int relocalizations_ = 0;
+  int frame_index_ = 0;
+  int initialized_frame_ = -1;
 };
 
 System::System(const SystemOptions& options) : impl_(std::make_unique<Impl>(options)) {}

@@ -28,7 +28,7 @@ class Vocabulary;
 namespace moslam::slam {
 
 struct SystemOptions {
-  io::SensorType sensor = io::SensorType::kRgbD;  // stereo or RGB-D (monocular: a later issue)
+  io::SensorType sensor = io::SensorType::kRgbD;  // stereo, RGB-D or monocular
   io::OrbSlamSettings settings;                   // as loaded by io::LoadOrbSlamSettings
   // Mapping synchronously after each keyframe, fixed seeds, one thread everywhere.
   bool deterministic = false;
@@ -59,8 +59,8 @@ struct SystemOptions {
 // One frame as the tracker takes it. Images are already loaded (io::LoadFrameImages).
 struct FrameInput {
   double timestamp = 0.0;  // seconds
-  cv::Mat image;           // left (stereo) or colour (RGB-D) image: CV_8UC1, or CV_8UC3/CV_8UC4
-                           // converted to grey following settings.rgb
+  cv::Mat image;           // left (stereo), colour (RGB-D) or the (monocular) image: CV_8UC1, or
+                           // CV_8UC3/CV_8UC4 converted to grey following settings.rgb
   cv::Mat right;           // stereo: the rectified right image, same size and type
   cv::Mat depth;           // RGB-D: CV_32FC1 metres registered to `image` (0 = invalid)
   cv::Mat mask;            // CV_8UC1 of the image's size, non-zero = movable object; empty = none
@@ -92,6 +92,8 @@ struct FrameReport {
 
 struct MapSummary {
   int keyframes = 0;
+  int initialized_frame = -1;  // index of the frame (from 0) whose Track() initialized the map
+  int resets = 0;  // monocular: initial maps rejected after bundle adjustment (ORB-SLAM2 resets)
   int map_points = 0;
   int lost_frames = 0;
   int relocalizations = 0;         // frames relocalized (FrameReport::relocalized)

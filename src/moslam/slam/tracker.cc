@@ -26,6 +26,7 @@ double MsSince(Clock::time_point t0) {
 // RGB-D (th = 7, doubled when too few matches), and of the local-map search (th = 1 times
 // RadiusByViewingCos, 2.5 to 4).
 constexpr float kMotionModelRadius = 7.0f;
+constexpr float kMonoMotionModelRadius = 15.0f;  // ORB-SLAM2: th = 15 for monocular
 constexpr float kLocalMapRadius = 3.0f;
 constexpr int kMinMotionModelMatches = 20;
 constexpr int kMinTrackingMatches = 10;
@@ -57,6 +58,14 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
   ++frames_since_keyframe_;
   ++frames_since_relocalization_;
 
+  if (!initialized_ && options_.monocular) {
+    TrackOutcome init = InitializeMonocular();
+    if (init.status == TrackStatus::kInitialized) {
+      last_ = std::move(current_);
+      last_ok_ = true;
+    }
+    return init;
+  }
   if (!initialized_) {
     const auto t0 = Clock::now();
     std::shared_ptr<map::KeyFrame> keyframe;
@@ -241,10 +250,11 @@ int Tracker::TrackWithMotionModel() {
   for (const auto& p : last_.points) {
     if (p && !p->bad) candidates.push_back(p);
   }
-  int n = SearchByProjection(candidates, kMotionModelRadius, true);
+  const float radius = options_.monocular ? kMonoMotionModelRadius : kMotionModelRadius;
+  int n = SearchByProjection(candidates, radius, true);
   if (n < kMinMotionModelMatches) {
     std::fill(current_.points.begin(), current_.points.end(), nullptr);
-    n = SearchByProjection(candidates, 2.0f * kMotionModelRadius, true);
+    n = SearchByProjection(candidates, 2.0f * radius, true);
   }
   if (n < kMinMotionModelMatches) return n;
   OptimizeCurrentPose();
@@ -340,8 +350,9 @@ int Tracker::TrackLocalMap() {
     if (!current_.outlier[i]) {
       ++p->found;
       if (p->num_observations() > 0) ++inliers;
-    } else {
-      // Stereo / RGB-D: outliers are dropped at once (ORB-SLAM2's TrackLocalMap).
+    } else if (!options_.monocular) {
+      // Stereo / RGB-D: outliers are dropped at once (ORB-SLAM2's TrackLocalMap); monocular keeps
+      // them flagged until the frame becomes the last frame.
       p = nullptr;
       current_.outlier[i] = false;
     }
@@ -448,7 +459,9 @@ void Tracker::SearchLocalPoints() {
 }
 
 bool Tracker::NeedNewKeyFrame() const {
-  // ORB-SLAM2's Tracking::NeedNewKeyFrame for stereo / RGB-D.
+  // ORB-SLAM2's Tracking::NeedNewKeyFrame. Monocular: no close points, a higher reference ratio
+  // (0.9: keyframes more often, they are the only source of new points), no "tracking weak"
+  // trigger, and no insertion while local mapping is busy.
   const size_t num_keyframes = map_->keyframes().size();
   // No keyframe just after a relocalization (unless the map is still small).
   const auto max_frames = static_cast<uint64_t>(options_.max_frames_between_keyframes);
@@ -467,13 +480,20 @@ bool Tracker::NeedNewKeyFrame() const {
     }
   }
   const bool need_close = tracked_close < 100 && untracked_close > 70;
-  const double th_ref = num_keyframes < 2 ? 0.4 : 0.75;
+  const double th_ref = num_keyframes < 2 ? 0.4 : (options_.monocular ? 0.9 : 0.75);
   const bool c1a =
       frames_since_keyframe_ >= static_cast<uint64_t>(options_.max_frames_between_keyframes);
-  const bool c1c = last_inliers_ < ref_matches * 0.25 || need_close;
+  const bool c1c = !options_.monocular && (last_inliers_ < ref_matches * 0.25 || need_close);
   const bool c2 = (last_inliers_ < ref_matches * th_ref || need_close) && last_inliers_ > 15;
   if (!((c1a || idle || c1c) && c2)) return false;
-  return idle || sink_->QueuedKeyFrames() < 3;
+  if (idle) return true;
+  if (options_.monocular) {
+    // Mapping becomes idle sooner, and the next frame gets its keyframe in (ORB-SLAM2; only for
+    // monocular here, which has no other source of new points).
+    sink_->InterruptMapping();
+    return false;
+  }
+  return sink_->QueuedKeyFrames() < 3;
 }
 
 std::shared_ptr<map::KeyFrame> Tracker::CreateKeyFrame() {

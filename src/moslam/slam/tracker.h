@@ -1,5 +1,6 @@
-// Tracking (ORB-SLAM2's Tracking, Mur-Artal & Tardós 2017) for stereo and RGB-D frames: map
-// initialization from the first frame with enough depth points; per frame a constant-velocity
+// Tracking (ORB-SLAM2's Tracking, Mur-Artal & Tardós 2017) for stereo, RGB-D and monocular
+// frames: map initialization from the first frame with enough depth points, or, monocular, from
+// two views (slam/mono_initializer.h; tracker_mono.cc); per frame a constant-velocity
 // motion model (projection search of the last frame's points), falling back to descriptor
 // matching against the reference keyframe; then the local map (covisible keyframes and their
 // points, projection search); pose-only optimization with Huber loss and chi-square rejection
@@ -23,6 +24,7 @@
 #include "moslam/map/map.h"
 #include "moslam/optim/observation.h"
 #include "moslam/slam/keyframe_database.h"
+#include "moslam/slam/mono_initializer.h"
 
 namespace moslam::slam {
 
@@ -36,6 +38,9 @@ class KeyFrameSink {
   virtual size_t QueuedKeyFrames() const = 0;
   // Called without the map lock held.
   virtual void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) = 0;
+  // Tracking wants a keyframe in while mapping is busy: stop the running local bundle adjustment
+  // (ORB-SLAM2's InterruptBA). Default: nothing.
+  virtual void InterruptMapping() {}
 };
 
 struct TrackerOptions {
@@ -44,6 +49,11 @@ struct TrackerOptions {
   int max_frames_between_keyframes = 10;  // ORB-SLAM2: fps
   int min_inliers = 30;                   // local-map inliers for "ok" (ORB-SLAM2: 30)
   int num_threads = 1;                    // for the pose optimizer
+  // Monocular: two-view initialization, no depth, ORB-SLAM2's monocular thresholds.
+  bool monocular = false;
+  MonoInitializerOptions initializer;  // monocular only
+  int min_init_features = 100;  // monocular: keypoints of an initialization frame (ORB-SLAM2)
+  int min_init_matches = 100;   // monocular: matches with the reference (ORB-SLAM2: 100)
 };
 
 enum class TrackStatus { kNotInitialized, kInitialized, kOk, kLost };
@@ -81,6 +91,9 @@ class Tracker {
     geometry::SE3 T_cam_ref;
   };
   const std::vector<FramePose>& frame_poses() const { return frame_poses_; }
+  bool initialized() const { return initialized_; }
+  // Monocular: initial maps rejected after bundle adjustment (ORB-SLAM2 resets then).
+  int rejected_initializations() const { return rejected_initializations_; }
 
  private:
   struct CurrentFrame {
@@ -91,6 +104,10 @@ class Tracker {
   };
 
   bool Initialize();
+  // Monocular initialization (tracker_mono.cc).
+  TrackOutcome InitializeMonocular();
+  bool CreateInitialMonocularMap(const std::vector<std::pair<size_t, size_t>>& pairs,
+                                 const MonoInitialization& init, std::string* reason);
   void RefreshLastFrame();
   int TrackWithMotionModel();
   int TrackReferenceKeyFrame();
@@ -129,6 +146,10 @@ class Tracker {
   const KeyFrameDatabase* database_ = nullptr;
   // Frames since the last relocalization (ORB-SLAM2's mnLastRelocFrameId); "never" at start.
   uint64_t frames_since_relocalization_ = UINT64_MAX / 2;
+  // Monocular initialization: the reference frame and where its keypoints were last matched.
+  std::unique_ptr<feature::Frame> init_reference_;
+  std::vector<Eigen::Vector2f> init_prev_matched_;
+  int rejected_initializations_ = 0;
 };
 
 }  // namespace moslam::slam
