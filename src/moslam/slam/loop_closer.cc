@@ -106,11 +106,12 @@ bool LoopCloser::ProcessKeyFrame(const KeyFramePtr& keyframe) {
     last_loop_keyframe_ = keyframe->id;
   }
   spdlog::info(
-      "loop closed: keyframe {} with keyframe {} ({} keyframes moved by Sim3, {} points fused; "
+      "loop closed: keyframe {} with keyframe {} (scale {:.4f}, {} keyframes moved by Sim3, {} "
+      "points fused; "
       "essential graph {} vertices, {} edges, cost {:.4g} -> {:.4g})",
-      keyframe->id, loop.loop->id, correction.corrected_keyframes, correction.fused_points,
-      correction.graph_vertices, correction.graph_edges, correction.graph_initial_cost,
-      correction.graph_final_cost);
+      keyframe->id, loop.loop->id, loop.S_cur_world.scale(), correction.corrected_keyframes,
+      correction.fused_points, correction.graph_vertices, correction.graph_edges,
+      correction.graph_initial_cost, correction.graph_final_cost);
   {
     std::lock_guard<std::mutex> stats_lock(stats_mutex_);
     ++stats_.loops_closed;

@@ -1,10 +1,11 @@
 // Loop closing end to end on the synthetic loop_room preset (docs/SYNTH.md): an RGB-D camera
 // walks a 1 m circle in a static office looking outwards and comes back to its first views after
 // one lap. The same deterministic run with and without loop closing is scored against the exact
-// ground truth. A vocabulary is trained here on the sequence's own frames (a small one, so the
-// test needs no shipped vocabulary file).
+// ground truth, as RGB-D and as monocular. A vocabulary is trained here on the sequence's own
+// frames (a small one, so the test needs no shipped vocabulary file).
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -60,29 +61,53 @@ double EndPointDrift(const std::string& groundtruth, const eval::Trajectory& est
   return (last.translation() - nearest(estimate.timestamps.back()).translation()).norm();
 }
 
-TEST(LoopCloser, ClosesTheLoopRoomAndCutsDrift) {
-  const testing::TempDir dir;
-  // MOSLAM_LOOP_ROOM: an already generated loop_room folder (to rerun quickly while working).
-  const char* existing = std::getenv("MOSLAM_LOOP_ROOM");
-  std::string folder = existing ? existing : dir.path();
-  if (!existing) {
-    synth::GeneratorOptions generator;
-    generator.preset = "loop_room";
-    generator.seed = 1;
-    generator.out = folder;
-    generator.progress = false;
-    synth::GenerateSequence(generator);
+// One loop_room sequence (seed 1, 600 frames) and its vocabulary for every test here.
+// MOSLAM_LOOP_ROOM: an already generated loop_room folder (to rerun quickly while working).
+class LoopRoom : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir;
+    const char* existing = std::getenv("MOSLAM_LOOP_ROOM");
+    folder_ = new std::string(existing ? existing : dir_->path());
+    if (!existing) {
+      synth::GeneratorOptions generator;
+      generator.preset = "loop_room";
+      generator.seed = 1;
+      generator.out = *folder_;
+      generator.progress = false;
+      synth::GenerateSequence(generator);
+    }
+    vocabulary_ = new std::shared_ptr<const vocab::Vocabulary>(TrainVocabulary(*folder_, 5));
   }
-  const auto vocabulary = TrainVocabulary(folder, 5);
-  auto with = [&](bool loop_closing) {
-    return [&vocabulary, loop_closing](SystemOptions* o) {
-      o->vocabulary = vocabulary;
+  static void TearDownTestSuite() {
+    delete vocabulary_;
+    delete folder_;
+    delete dir_;
+  }
+  static std::function<void(SystemOptions*)> With(bool loop_closing, bool monocular) {
+    return [loop_closing, monocular](SystemOptions* o) {
+      o->vocabulary = *vocabulary_;
       o->loop_closing = loop_closing;
+      if (monocular) o->sensor = io::SensorType::kMonocular;
     };
-  };
-  const std::string settings = folder + "/settings.yaml";
-  const DatasetRun off = RunDataset(folder, settings, /*deterministic=*/true, 0, "", with(false));
-  const DatasetRun on = RunDataset(folder, settings, /*deterministic=*/true, 0, "", with(true));
+  }
+  static DatasetRun Run(bool loop_closing, bool monocular) {
+    return RunDataset(*folder_, *folder_ + "/settings.yaml", /*deterministic=*/true, 0, "",
+                      With(loop_closing, monocular));
+  }
+
+  static testing::TempDir* dir_;
+  static std::string* folder_;
+  static std::shared_ptr<const vocab::Vocabulary>* vocabulary_;
+};
+testing::TempDir* LoopRoom::dir_ = nullptr;
+std::string* LoopRoom::folder_ = nullptr;
+std::shared_ptr<const vocab::Vocabulary>* LoopRoom::vocabulary_ = nullptr;
+
+TEST_F(LoopRoom, RgbdClosesTheLoopAndCutsDrift) {
+  const std::string folder = *folder_;
+  const DatasetRun off = Run(false, false);
+  const DatasetRun on = Run(true, false);
   const double drift_off = EndPointDrift(folder + "/groundtruth.txt", off.estimate);
   const double drift_on = EndPointDrift(folder + "/groundtruth.txt", on.estimate);
   std::printf(
@@ -99,6 +124,23 @@ TEST(LoopCloser, ClosesTheLoopRoomAndCutsDrift) {
   // end-point drift clears it by a wide margin on the seeds measured (docs/EVALUATION.md), the
   // ATE (drift averaged over the whole walk, SE(3)-aligned) must at least halve.
   EXPECT_GT(drift_off, 5.0 * drift_on);
+  EXPECT_LT(2.0 * on.ate_rmse, off.ate_rmse);
+}
+
+TEST_F(LoopRoom, MonocularClosesTheLoopWithSim3) {
+  // The same walk seen by the colour camera alone: the map has an arbitrary, drifting scale, the
+  // loop is a Sim(3) (measured scale 1.054 at the loop, here and with a vocabulary trained on seed
+  // 2, docs/EVALUATION.md) and the essential graph has 7 degrees of freedom per keyframe.
+  const DatasetRun off = Run(false, true);
+  const DatasetRun on = Run(true, true);
+  std::printf(
+      "loop_room seed 1 monocular: loop closing off: ATE RMSE (Sim3) %.4f m; on: %d loops, ATE "
+      "RMSE (Sim3) %.4f m\n",
+      off.ate_rmse, on.summary.loops_closed, on.ate_rmse);
+  EXPECT_EQ(off.summary.loops_closed, 0);
+  EXPECT_GE(on.summary.loops_closed, 1);
+  // Sim(3)-aligned ATE spreads the drift over the walk (the alignment absorbs the mean scale);
+  // measured 2.8x lower with loop closing on seed 1; the bound asks for half.
   EXPECT_LT(2.0 * on.ate_rmse, off.ate_rmse);
 }
 
