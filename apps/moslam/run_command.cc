@@ -44,7 +44,27 @@ struct RunArgs {
   bool deterministic = false;
   bool monocular = false;
   bool quiet = false;
+  bool no_loop_closing = false;
 };
+
+// The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
+// moslam is run from like the configs/ paths of the examples.
+constexpr const char* kShippedVocabulary = "data/vocab/moslam_orb.mvoc";
+
+// --vocabulary: a file, "none", or "default" = the shipped one when it is there (else none).
+std::string ResolveVocabulary(const std::string& arg) {
+  if (arg == "none") return "";
+  if (arg != "default") {
+    if (!std::filesystem::is_regular_file(arg)) ThrowInput("--vocabulary: no file '{}'", arg);
+    return arg;
+  }
+  if (std::filesystem::is_regular_file(kShippedVocabulary)) return kShippedVocabulary;
+  spdlog::warn(
+      "no vocabulary ({} not found here; run from the repository root or pass "
+      "--vocabulary FILE): no relocalization or loop closing",
+      kShippedVocabulary);
+  return "";
+}
 
 #if MOSLAM_HAVE_SLAM
 // slam::System behind the runner's interface.
@@ -63,44 +83,24 @@ class SystemTracker : public runner::Tracker {
 #endif
 
 std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings,
-                                             io::SensorType sensor, bool deterministic,
-                                             const std::string& vocabulary) {
+                                             io::SensorType sensor, const RunArgs& args) {
 #if MOSLAM_HAVE_SLAM
   slam::SystemOptions options;
   options.sensor = sensor;
   options.settings = settings;
-  options.deterministic = deterministic;
-  options.vocabulary_path = vocabulary;
+  options.deterministic = args.deterministic;
+  options.vocabulary_path = ResolveVocabulary(args.vocabulary);
+  options.loop_closing = !args.no_loop_closing;
   options.Check();
   return std::make_unique<SystemTracker>(options);
 #else
   (void)settings;
   (void)sensor;
-  (void)deterministic;
-  (void)vocabulary;
+  (void)args;
   ThrowInput(
       "this moslam was built without the SLAM core (target moslam::slam); `moslam run` "
       "needs it");
 #endif
-}
-
-// The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
-// moslam is run from like the configs/ paths of the examples.
-constexpr const char* kShippedVocabulary = "data/vocab/moslam_orb.mvoc";
-
-// --vocabulary: a file, "none", or "default" = the shipped one when it is there (else none).
-std::string ResolveVocabulary(const std::string& arg) {
-  if (arg == "none") return "";
-  if (arg != "default") {
-    if (!std::filesystem::is_regular_file(arg)) ThrowInput("--vocabulary: no file '{}'", arg);
-    return arg;
-  }
-  if (std::filesystem::is_regular_file(kShippedVocabulary)) return kShippedVocabulary;
-  spdlog::warn(
-      "no vocabulary ({} not found here; run from the repository root or pass "
-      "--vocabulary FILE): no relocalization",
-      kShippedVocabulary);
-  return "";
 }
 
 runner::MaskOptions MakeMaskOptions(const RunArgs& args) {
@@ -178,8 +178,7 @@ void Run(const RunArgs& args) {
   spdlog::info("{}: {} frames ({}), masks: {}", sequence.root, sequence.size(),
                io::ToString(sequence.sensor), description.mask_source);
 
-  const std::unique_ptr<runner::Tracker> tracker = MakeTracker(
-      settings, sequence.sensor, args.deterministic, ResolveVocabulary(args.vocabulary));
+  const std::unique_ptr<runner::Tracker> tracker = MakeTracker(settings, sequence.sensor, args);
   const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
   const std::string summary = runner::WriteRunOutputs(sequence, result, description, out);
@@ -240,9 +239,9 @@ void AddRunCommand(CLI::App& app) {
   command
       ->add_option("--vocabulary", args->vocabulary,
                    "Bag-of-words vocabulary (moslam binary .mvoc or ORB-SLAM2's ORBvoc.txt) for "
-                   "relocalization when tracking is lost; 'default': the shipped "
+                   "relocalization and loop closing; 'default': the shipped "
                    "data/vocab/moslam_orb.mvoc (relative to the working directory, skipped with a "
-                   "warning when absent); 'none': no relocalization")
+                   "warning when absent); 'none': neither")
       ->capture_default_str();
   command->add_option(
       "--rate", args->rate_hz,
@@ -258,6 +257,8 @@ void AddRunCommand(CLI::App& app) {
                     "Monocular SLAM on the left / colour images only, ignoring right images and "
                     "depth (a KITTI folder without image_1 is monocular anyway)");
   command->add_flag("--quiet", args->quiet, "No progress line and only warnings in the log");
+  command->add_flag("--no-loop-closing", args->no_loop_closing,
+                    "Run without loop closing even with a vocabulary (to measure what it does)");
   command->callback([args] {
     if (args->quiet) spdlog::set_level(std::max(spdlog::get_level(), spdlog::level::warn));
     Run(*args);

@@ -8,6 +8,15 @@
 // solves without it, and writes the result back under it, skipping entities that were erased in
 // between. No other mutex is ever taken while holding this one, except the keyframe queue's
 // (which never calls back), so there is no lock-order cycle.
+//
+// Loop closing (slam/loop_closer.h) holds the mutex for its whole correction (Sim(3)
+// propagation, fusion, essential-graph optimization), so tracking and local mapping see the map
+// either before or after it, never half-corrected; it then bumps generation(). Local bundle
+// adjustment records the generation when it copies its problem out and drops its result when the
+// generation changed before the write-back (its poses would undo the correction). The global
+// bundle adjustment after a loop is copied, solved in its own thread and merged the same way: a
+// merge whose copy is older than the current generation (a second loop closed meanwhile) is
+// dropped.
 #pragma once
 
 #include <cstdint>
@@ -53,12 +62,20 @@ class Map {
   std::shared_ptr<KeyFrame> keyframe(uint64_t id) const;
   uint64_t next_keyframe_id() const { return next_keyframe_id_; }
 
+  // Bumped by every global move of poses and points (loop correction, the merge of a global
+  // bundle adjustment). A step that copied poses out under an older generation and solved
+  // without the lock (local bundle adjustment) must drop its result instead of writing stale
+  // poses over the correction.
+  uint64_t generation() const { return generation_; }
+  void BumpGeneration() { ++generation_; }
+
  private:
   mutable std::mutex mutex_;
   std::map<uint64_t, std::shared_ptr<KeyFrame>> keyframes_;
   std::map<uint64_t, std::shared_ptr<MapPoint>> points_;
   uint64_t next_keyframe_id_ = 0;
   uint64_t next_point_id_ = 0;
+  uint64_t generation_ = 0;
   std::function<void(const KeyFrame&)> erase_listener_;
 };
 

@@ -151,9 +151,11 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
     size_t pose, point, index;
   };
   std::vector<EdgeRef> edges;
+  uint64_t generation = 0;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
     if (keyframe->bad() || map_->keyframes().size() <= 2) return;
+    generation = map_->generation();
     std::map<uint64_t, size_t> pose_index;
     std::vector<std::shared_ptr<map::KeyFrame>> local = {keyframe};
     for (const auto& kf : keyframe->BestCovisibles(-1)) local.push_back(kf);
@@ -220,6 +222,11 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
       2.0 * result.initial_cost / inliers, 2.0 * result.final_cost / inliers);
 
   std::lock_guard<std::mutex> lock(map_->mutex());
+  if (map_->generation() != generation) {
+    // A loop correction moved the map while this ran: the result is relative to the old poses.
+    spdlog::debug("local BA kf {}: dropped (map corrected meanwhile)", keyframe->id);
+    return;
+  }
   for (size_t k = 0; k < edges.size(); ++k) {
     if (result.edge_inlier[k]) continue;
     const auto& kf = poses[edges[k].pose];

@@ -23,6 +23,7 @@
 #include "moslam/map/map.h"
 #include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/local_mapper.h"
+#include "moslam/slam/loop_closer.h"
 #include "moslam/slam/tracker.h"
 #include "moslam/util/bounded_queue.h"
 #include "moslam/util/error.h"
@@ -115,8 +116,15 @@ class System::Impl : public KeyFrameSink {
       tracker_.SetKeyFrameDatabase(keyframe_database_.get());
       map_.SetKeyFrameEraseListener(
           [db = keyframe_database_.get()](const map::KeyFrame& kf) { db->Erase(kf); });
+      if (options_.loop_closing) {
+        loop_closer_ = std::make_unique<LoopCloser>(&map_, camera_, Bf(options),
+                                                    keyframe_database_.get(), LoopOptions(options));
+      }
     }
     if (!options_.deterministic) mapping_thread_ = std::thread([this] { MappingLoop(); });
+    if (!options_.deterministic && loop_closer_) {
+      loop_thread_ = std::thread([this] { LoopClosingLoop(); });
+    }
   }
   ~Impl() override { Finish(); }
 
@@ -135,6 +143,13 @@ class System::Impl : public KeyFrameSink {
     m.far_stereo_as_monocular = o.ba_far_stereo_as_monocular;
     return m;
   }
+  static LoopCloserOptions LoopOptions(const SystemOptions& o) {
+    LoopCloserOptions l;
+    l.fix_scale = !Mono(o);  // stereo/RGB-D maps have metric scale; monocular ones drift in scale
+    l.global_bundle_adjustment = o.loop_global_bundle_adjustment;
+    l.synchronous = o.deterministic;
+    return l;
+  }
   static TrackerOptions TrackerOpts(const SystemOptions& o) {
     TrackerOptions t;
     t.monocular = Mono(o);
@@ -152,7 +167,10 @@ class System::Impl : public KeyFrameSink {
   void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) override {
     // Synchronous in deterministic mode, and after Finish() closed the queue (Track() may still
     // be called then; its keyframes are mapped in the caller's thread).
-    if (options_.deterministic || !queue_.Push(keyframe)) mapper_.ProcessKeyFrame(keyframe);
+    if (options_.deterministic || !queue_.Push(keyframe)) {
+      mapper_.ProcessKeyFrame(keyframe);
+      if (loop_closer_) loop_closer_->ProcessKeyFrame(keyframe);
+    }
   }
 
   FrameReport Track(const FrameInput& input) {
@@ -194,6 +212,10 @@ class System::Impl : public KeyFrameSink {
   void Finish() {
     queue_.Close();
     if (mapping_thread_.joinable()) mapping_thread_.join();
+    // Mapping has handed over its last keyframe: drain loop closing, then its global BA.
+    loop_queue_.Close();
+    if (loop_thread_.joinable()) loop_thread_.join();
+    if (loop_closer_) loop_closer_->WaitForGlobalBundleAdjustment();
   }
 
   eval::Trajectory CameraTrajectory() const {
@@ -236,6 +258,11 @@ class System::Impl : public KeyFrameSink {
     }
     summary.lost_frames = lost_frames_;
     summary.relocalizations = relocalizations_;
+    if (loop_closer_) {
+      const LoopCloserStats loops = loop_closer_->Stats();
+      summary.loops_closed = loops.loops_closed;
+      summary.global_ba_merged = loops.global_ba_merged;
+    }
     summary.initialized_frame = initialized_frame_;
     summary.resets = tracker_.rejected_initializations();
     const std::vector<double> steps = mapper_.StepTimes();
@@ -270,7 +297,14 @@ class System::Impl : public KeyFrameSink {
       mapping_busy_ = true;
       mapper_.ProcessKeyFrame(*keyframe, [this] { return queue_.size() > 0; });
       mapping_busy_ = false;
+      // Loop closing after local mapping (ORB-SLAM2's InsertKeyFrame into LoopClosing); blocks
+      // when the loop closer is 16 keyframes behind, which only a long correction causes.
+      if (loop_closer_ && !loop_queue_.Push(*keyframe)) loop_closer_->ProcessKeyFrame(*keyframe);
     }
+  }
+
+  void LoopClosingLoop() {
+    while (auto keyframe = loop_queue_.Pop()) loop_closer_->ProcessKeyFrame(*keyframe);
   }
 
   const SystemOptions options_;
@@ -289,6 +323,11 @@ class System::Impl : public KeyFrameSink {
   std::unique_ptr<KeyFrameDatabase> keyframe_database_;
   std::atomic<bool> mapping_busy_{false};
   std::thread mapping_thread_;
+  // Keyframes local mapping has processed, for loop closing (null without a vocabulary or with
+  // SystemOptions::loop_closing off). Declared after the database it uses.
+  BoundedQueue<std::shared_ptr<map::KeyFrame>> loop_queue_{16};
+  std::unique_ptr<LoopCloser> loop_closer_;
+  std::thread loop_thread_;
   int lost_frames_ = 0;
   int relocalizations_ = 0;
   int frame_index_ = 0;

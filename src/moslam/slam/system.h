@@ -46,6 +46,13 @@ struct SystemOptions {
   // An already loaded (or trained) vocabulary; takes precedence over vocabulary_path. Shared, so
   // several systems or tests load it once.
   std::shared_ptr<const vocab::Vocabulary> vocabulary;
+  // Loop closing (slam/loop_closer.h) in its own thread, fed by local mapping; needs a vocabulary
+  // (without one it is off whatever this says). Default on, as ORB-SLAM2; off to measure what it
+  // contributes (moslam run --no-loop-closing).
+  bool loop_closing = true;
+  // The full bundle adjustment after each closed loop
+  // (LoopCloserOptions::global_bundle_adjustment).
+  bool loop_global_bundle_adjustment = true;
   void Check() const;  // InputError naming the field
 };
 
@@ -90,6 +97,8 @@ struct MapSummary {
   int map_points = 0;
   int lost_frames = 0;
   int relocalizations = 0;         // frames relocalized (FrameReport::relocalized)
+  int loops_closed = 0;            // loop corrections (LoopCloserStats)
+  int global_ba_merged = 0;        // full bundle adjustments after a loop, written back
   int mapping_steps = 0;           // keyframes processed by local mapping
   double mapping_ms_median = 0.0;  // per processed keyframe
   double mapping_ms_total = 0.0;

@@ -298,6 +298,20 @@ std::function<SE3(double)> IndoorTrajectory(const std::string& name, Rng& rng) {
       return LookAt(centre + 0.5 * dir, target);
     };
   }
+  if (name == "loop_room") {
+    // A walk around a 1 m circle near the middle of the room, looking outwards (slightly down) at
+    // the walls, shelves and desks: one lap every 8 s, so the camera revisits the first views
+    // after 240 frames and a loop can be closed; 600 frames walk 2.5 laps, long enough for the
+    // drift of an uncorrected run to stand well above the depth noise's centimetre floor.
+    const Vector3d centre(rng.Uniform(-0.1, 0.1), -0.8 + rng.Uniform(-0.1, 0.1), 1.4);
+    const double phase = rng.Uniform(0, 2 * M_PI), lap_s = 8.0, radius = 1.0;
+    return [=](double t) {
+      const double a = phase + 2 * M_PI * t / lap_s;
+      const Vector3d out(std::cos(a), std::sin(a), 0.0);
+      const Vector3d eye = centre + radius * out + Vector3d(0, 0, 0.05 * pos[2](t));
+      return jitter(t, 0.02, 1.0 * kDeg, LookAt(eye, eye + out + Vector3d(0, 0, -0.2)));
+    };
+  }
   MOSLAM_CHECK(false) << "no trajectory for " << name;
   return {};
 }
@@ -361,6 +375,10 @@ const std::vector<PresetInfo>& Presets() {
        10.0},
       {"static_xyz", "w_xyz's room and camera path without people (static-scene reference)", false,
        859, 30.0},
+      {"loop_room",
+       "the office without people, camera walking a 1 m circle looking outwards, 2.5 laps "
+       "(loop closing)",
+       false, 600, 30.0},
   };
   return kPresets;
 }
@@ -425,7 +443,8 @@ SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet
     return spec;
   }
   spec.camera = TumCamera(width > 0 ? width : 640, height > 0 ? height : 480);
-  BuildOffice(b, scene_name != "s_static", scene_name == "s_static");
+  const bool people = scene_name != "loop_room";
+  BuildOffice(b, people && scene_name != "s_static", people && scene_name == "s_static");
   spec.T_world_cam = IndoorTrajectory(scene_name, rng);
   if (static_scene) spec.world.actors.clear();
   return spec;
