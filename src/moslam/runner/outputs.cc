@@ -174,7 +174,8 @@ void WriteFramesCsv(const RunResult& result, const std::string& path) {
   for (const FrameRecord& f : result.frames) {
     const slam::FrameReport& r = f.report;
     out << fmt::format(
-        "{},{:.6f},{},{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.3f},{:.3f},"
+        "{},{:.6f},{},{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.3f},{:.3f}"
+        ","
         "{}\n",
         f.index, f.timestamp, StateName(r.state), CsvField(r.reason), r.num_features, r.num_matches,
         r.num_inliers, r.new_keyframe ? 1 : 0, r.times.extract_ms, r.times.track_ms,
