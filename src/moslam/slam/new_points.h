@@ -54,7 +54,9 @@ std::vector<std::shared_ptr<map::MapPoint>> CreatePointsFromMatches(
 
 // Epipolar matches between unmatched keypoints of kf1 and kf2 (pairs of keypoint indices):
 // distance <= feature::kThLow, squared distance to the epipolar line of kf1's keypoint in kf2
-// under 3.84 sigma^2 of kf2's level, each keypoint used once, rotation-consistent. Exposed for
+// under 3.84 sigma^2 of kf2's level, each keypoint used once, rotation-consistent. When both
+// keyframes carry a bag-of-words direct index, only keypoints under the same vocabulary node
+// are compared (ORB-SLAM2); otherwise every free keypoint of kf2 is a candidate. Exposed for
 // tests.
 std::vector<std::pair<size_t, size_t>> SearchForTriangulation(const map::KeyFrame& kf1,
                                                               const map::KeyFrame& kf2,
@@ -63,6 +65,7 @@ std::vector<std::pair<size_t, size_t>> SearchForTriangulation(const map::KeyFram
 std::vector<std::pair<size_t, size_t>> SearchForTriangulation(
     const feature::Frame& frame1, const geometry::SE3& T_cam1_world, const std::vector<bool>& free1,
     const feature::Frame& frame2, const geometry::SE3& T_cam2_world, const std::vector<bool>& free2,
-    const camera::PinholeCamera& camera);
+    const camera::PinholeCamera& camera, const vocab::FeatureVector* features1 = nullptr,
+    const vocab::FeatureVector* features2 = nullptr);
 
 }  // namespace moslam::slam

@@ -1,6 +1,8 @@
 // Triangulation of new map points between two keyframes with exact synthetic observations.
 #include "moslam/slam/new_points.h"
 
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "moslam/slam/test_scene.h"
@@ -61,6 +63,42 @@ TEST(SearchForTriangulation, RejectsMatchesOffTheEpipolarLine) {
   for (auto& p : moved.points) p.y() += 1.0;
   auto kf2 = testing::ObserveScene(&map, moved, testing::CameraAt(1.0));
   EXPECT_TRUE(SearchForTriangulation(*kf1, *kf2, testing::TestCamera()).empty());
+}
+
+// Monocular pairs with a bag-of-words direct index compare only keypoints under the same
+// vocabulary node (ORB-SLAM2): with every keypoint under one node the result is the brute-force
+// one, with nodes that keep each true pair together too, and nothing matches across nodes.
+TEST(SearchForTriangulation, MonocularPairsSearchWithinVocabularyNodes) {
+  const testing::Scene scene = testing::RandomScene(120, 6);
+  map::Map map;
+  std::lock_guard<std::mutex> lock(map.mutex());
+  auto kf1 = testing::ObserveScene(&map, scene, testing::CameraAt(0.0));
+  auto kf2 = testing::ObserveScene(&map, scene, testing::CameraAt(1.0));
+  feature::Frame f1 = kf1->frame, f2 = kf2->frame;
+  f1.bf = f2.bf = 0.0;  // monocular
+  const std::vector<bool> free1(f1.size(), true), free2(f2.size(), true);
+  const auto search = [&](const vocab::FeatureVector* fv1, const vocab::FeatureVector* fv2) {
+    return SearchForTriangulation(f1, kf1->T_cam_world(), free1, f2, kf2->T_cam_world(), free2,
+                                  testing::TestCamera(), fv1, fv2);
+  };
+  const auto brute = search(nullptr, nullptr);
+  ASSERT_GT(brute.size(), 60u);
+  for (const auto& [i1, i2] : brute) ASSERT_EQ(i1, i2);  // exact synthetic descriptors
+
+  const auto by_parity = [](size_t n, uint32_t even_node, uint32_t odd_node) {
+    vocab::FeatureVector fv;
+    for (uint32_t i = 0; i < n; ++i) fv[i % 2 == 0 ? even_node : odd_node].push_back(i);
+    return fv;
+  };
+  const vocab::FeatureVector one1 = by_parity(f1.size(), 7, 7), one2 = by_parity(f2.size(), 7, 7);
+  EXPECT_EQ(search(&one1, &one2), brute);
+  const vocab::FeatureVector split1 = by_parity(f1.size(), 3, 5);
+  const vocab::FeatureVector split2 = by_parity(f2.size(), 3, 5);
+  auto split = search(&split1, &split2);  // node by node: the same pairs in another order
+  std::sort(split.begin(), split.end());
+  EXPECT_EQ(split, brute);
+  const vocab::FeatureVector swapped2 = by_parity(f2.size(), 5, 3);
+  EXPECT_TRUE(search(&split1, &swapped2).empty());
 }
 
 }  // namespace
