@@ -1,4 +1,5 @@
 #include "moslam/slam/local_mapper.h"
+#include "moslam/slam/camera_model.h"
 
 #include <algorithm>
 #include <chrono>
@@ -42,13 +43,7 @@ bool IsFar(const optim::Observation& observation, double bf, double close_depth)
 
 LocalMapper::LocalMapper(map::Map* map, const camera::PinholeCamera& camera, double bf,
                          const LocalMapperOptions& options)
-    : map_(map), camera_(camera), options_(options) {
-  model_.fx = camera.fx();
-  model_.fy = camera.fy();
-  model_.cx = camera.cx();
-  model_.cy = camera.cy();
-  model_.bf = bf;
-}
+    : map_(map), camera_(camera), model_(CameraModelFor(camera, bf)), options_(options) {}
 
 void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe,
                                   const std::function<bool()>& more_queued) {

@@ -1,4 +1,5 @@
 #include "moslam/slam/loop_closer.h"
+#include "moslam/slam/camera_model.h"
 
 #include <algorithm>
 #include <utility>
@@ -63,13 +64,12 @@ std::vector<Sim3Correspondence> Correspondences(const map::KeyFrame& kf1, const 
 
 LoopCloser::LoopCloser(map::Map* map, const camera::PinholeCamera& camera, double bf,
                        KeyFrameDatabase* database, const LoopCloserOptions& options)
-    : map_(map), camera_(camera), database_(database), options_((options.Check(), options)) {
+    : map_(map),
+      camera_(camera),
+      model_(CameraModelFor(camera, bf)),
+      database_(database),
+      options_((options.Check(), options)) {
   MOSLAM_CHECK(database_ != nullptr) << "loop closing needs a keyframe database";
-  model_.fx = camera.fx();
-  model_.fy = camera.fy();
-  model_.cx = camera.cx();
-  model_.cy = camera.cy();
-  model_.bf = bf;
 }
 
 LoopCloser::~LoopCloser() { WaitForGlobalBundleAdjustment(); }

@@ -2,20 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include "moslam/slam/camera_model.h"
 #include "moslam/slam/test_scene.h"
 
 namespace moslam::slam {
 namespace {
 
-optim::CameraModel Model() {
-  const camera::PinholeCamera cam = testing::TestCamera();
-  optim::CameraModel m;
-  m.fx = cam.fx();
-  m.fy = cam.fy();
-  m.cx = cam.cx();
-  m.cy = cam.cy();
-  return m;
-}
+optim::CameraModel Model() { return CameraModelFor(testing::TestCamera()); }
 
 // The result a solver would return: every pose moved by `shift` (world x), points unchanged.
 optim::BundleResult Shifted(const GlobalBundleJob& job, double shift) {

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "moslam/slam/camera_model.h"
 #include "moslam/slam/test_scene.h"
 #include "moslam/vocab/test_descriptors.h"
 
@@ -15,15 +16,7 @@ using testing::CameraAt;
 using testing::ObserveScene;
 using testing::RandomScene;
 
-optim::CameraModel Model() {
-  const camera::PinholeCamera cam = testing::TestCamera();
-  optim::CameraModel m;
-  m.fx = cam.fx();
-  m.fy = cam.fy();
-  m.cx = cam.cx();
-  m.cy = cam.cy();
-  return m;
-}
+optim::CameraModel Model() { return CameraModelFor(testing::TestCamera()); }
 
 struct Fixture {
   map::Map map;

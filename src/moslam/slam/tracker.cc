@@ -1,4 +1,5 @@
 #include "moslam/slam/tracker.h"
+#include "moslam/slam/camera_model.h"
 
 #include <algorithm>
 #include <chrono>
@@ -40,13 +41,12 @@ constexpr int kMinInliersAfterRelocalization = 50;
 
 Tracker::Tracker(map::Map* map, const camera::PinholeCamera& camera, double bf,
                  const TrackerOptions& options, KeyFrameSink* sink)
-    : map_(map), camera_(camera), options_(options), sink_(sink) {
+    : map_(map),
+      camera_(camera),
+      model_(CameraModelFor(camera, bf)),
+      options_(options),
+      sink_(sink) {
   MOSLAM_CHECK(map_ != nullptr && sink_ != nullptr);
-  model_.fx = camera.fx();
-  model_.fy = camera.fy();
-  model_.cx = camera.cx();
-  model_.cy = camera.cy();
-  model_.bf = bf;
 }
 
 TrackOutcome Tracker::Track(feature::Frame frame) {
