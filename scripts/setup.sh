@@ -9,6 +9,7 @@ PACKAGES=(
   # libraries (README "Dependencies" says why each)
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
   libceres-dev
+  libopencv-contrib-dev libtorch-dev
   libosmesa6-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -1,0 +1,104 @@
+// The networks of the weakly supervised pipeline (Sun, Tai, Gao, Liu, Yeung 2019, "Fully using
+// classifiers for weakly supervised semantic segmentation with modified cues"; its segmentation
+// stage follows SEC, Kolesnikov and Lampert, ECCV 2016): a multi-label classifier whose class
+// activation maps (Zhou et al., CVPR 2016) give localization cues, and a segmentation network
+// trained on those cues. Both share the MobileNetV2 backbone (mobilenet_v2.h).
+//
+// Class conventions:
+//   classifier: `classes` are the image-level classes, in label-vector order (no background
+//               entry unless the dataset names one as an ordinary class);
+//   segmenter:  output channel l is class l of NetConfig::classes.
+// `classes` of a segmenter are those of the classifiers whose cues trained it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+#include <opencv2/core.hpp>
+#include <torch/torch.h>
+
+#include "moslam/net/mobilenet_v2.h"
+
+namespace moslam::net {
+
+enum class NetKind { kClassifier, kSegmenter };
+
+// Everything needed to rebuild a network and feed it: saved inside every model file.
+struct NetConfig {
+  NetKind kind = NetKind::kClassifier;
+  std::vector<std::string> classes;
+  std::vector<std::string> movable;  // subset of classes
+  // Name of the class that means "none of the others" (seeds where every class is weak; never
+  // suppressed at test time); empty when every pixel belongs to a named class (CamVid).
+  std::string background;
+  BackboneOptions backbone;
+  // Segmenter head: a light ASPP (Chen et al. 2017): parallel 3x3 convs with these dilations
+  // plus a 1x1 branch and image pooling, `head_channels` each, then a 1x1 conv to the classes.
+  int head_channels = 96;
+  std::vector<int> head_dilations = {2, 4, 6};
+  // Input: images are resized to input_width x input_height (pixels) and given as RGB in
+  // [-1, 1]; grey networks get the grey image in all three channels.
+  int input_width = 320;
+  int input_height = 240;
+  bool grey = false;
+
+  void Check() const;  // InputError naming the field
+  int num_classes() const { return static_cast<int>(classes.size()); }
+  int BackgroundIndex() const;  // -1 when `background` is empty
+};
+nlohmann::json ToJson(const NetConfig& config);
+NetConfig NetConfigFromJson(const nlohmann::json& json);  // InputError on unknown/missing keys
+
+struct ClassifierOutput {
+  torch::Tensor logits;  // N x C, before the sigmoid
+  torch::Tensor cams;    // N x C x h x w class activation maps (the 1x1-conv class map), at the
+                         // backbone's output stride; logits = spatial mean of cams
+};
+
+// Backbone -> 1x1 conv to C class maps -> global average pooling (Zhou et al. 2016, with the
+// class map computed before pooling so that it is the CAM itself).
+class ClassifierNetImpl : public torch::nn::Module {
+ public:
+  explicit ClassifierNetImpl(const NetConfig& config);
+  ClassifierOutput forward(torch::Tensor x);
+  const NetConfig& config() const { return config_; }
+  MobileNetV2& backbone() { return backbone_; }
+
+ private:
+  NetConfig config_;
+  MobileNetV2 backbone_{nullptr};
+  torch::nn::Conv2d class_map_{nullptr};
+};
+TORCH_MODULE(ClassifierNet);
+
+struct SegmenterOutput {
+  torch::Tensor logits;        // N x C x h x w per-pixel class scores at the backbone's stride
+  torch::Tensor class_logits;  // N x C image-level scores (an auxiliary classifier on the same
+                               // backbone: what test-time suppression reads, at no extra cost)
+};
+
+class SegmenterNetImpl : public torch::nn::Module {
+ public:
+  explicit SegmenterNetImpl(const NetConfig& config);
+  SegmenterOutput forward(torch::Tensor x);
+  const NetConfig& config() const { return config_; }
+  MobileNetV2& backbone() { return backbone_; }
+
+ private:
+  NetConfig config_;
+  MobileNetV2 backbone_{nullptr};
+  torch::nn::ModuleList aspp_{nullptr};
+  torch::nn::Sequential image_pool_{nullptr};
+  torch::nn::Sequential project_{nullptr};
+  torch::nn::Conv2d classify_{nullptr};
+  torch::nn::Conv2d aux_class_map_{nullptr};
+};
+TORCH_MODULE(SegmenterNet);
+
+// Image (CV_8UC3 BGR or CV_8UC1 grey, any size) -> 1 x 3 x input_height x input_width float
+// tensor as the config wants it (resized with INTER_AREA when shrinking, grey replicated or colour
+// converted to grey when config.grey).
+torch::Tensor ImageToTensor(const cv::Mat& image, const NetConfig& config);
+
+}  // namespace moslam::net

@@ -1,0 +1,58 @@
+// Data augmentation and batching for the weak pipeline: flip, scale, crop, colour (brightness,
+// contrast, saturation), optional conversion to grey. The same geometric transform is applied to
+// an optional cue map (nearest neighbour) so that segmentation training sees seeds aligned with
+// the augmented image; crops of CamVid images are relabelled by what they contain (CropLabels).
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <torch/torch.h>
+
+#include "moslam/weak/image_list.h"
+
+namespace moslam::weak {
+
+struct AugmentOptions {
+  int output_width = 320;   // pixels: every sample is resized to this
+  int output_height = 240;
+  bool flip = true;               // horizontal flip with probability 0.5
+  double min_scale = 0.7;         // crop side as a fraction of the image side (uniform in range)
+  double max_scale = 1.0;
+  double crop_probability = 0.5;  // otherwise the whole image
+  double brightness = 0.2;        // +- fraction
+  double contrast = 0.2;          // +- fraction
+  double saturation = 0.2;        // +- fraction (colour images)
+  bool grey = false;              // convert to grey (replicated to three channels in tensors)
+
+  void Check() const;  // InputError naming the field
+};
+
+struct Sample {
+  cv::Mat image;            // CV_8UC3 BGR (grey replicated when grey), output size
+  cv::Mat cue;              // CV_8UC1 labels (255 = unknown) of output size, when a cue was given
+  std::vector<int> classes;  // image-level labels of the (cropped) sample
+  int index = -1;           // entry index
+};
+
+// Reads entry `index` of `list` (and `cue_path` when not empty), augments it with `rng`.
+// With `augment` false: the whole image resized, no flip or colour change (evaluation, cues).
+Sample LoadSample(const ImageList& list, int index, const AugmentOptions& options,
+                  std::mt19937_64& rng, bool augment, const std::string& cue_path = "");
+
+struct Batch {
+  torch::Tensor images;  // N x 3 x H x W float, RGB in [-1, 1]
+  torch::Tensor labels;  // N x C float multi-hot
+  torch::Tensor cues;    // N x H x W int64 (255 = unknown), undefined without cues
+  std::vector<cv::Mat> bgr;  // the samples' images (the CRF of the constrain loss needs them)
+  std::vector<int> indices;
+};
+
+Batch MakeBatch(const std::vector<Sample>& samples, int num_classes);
+
+// BGR (or grey) 8-bit image -> 3 x H x W float tensor, RGB in [-1, 1].
+torch::Tensor ToInputTensor(const cv::Mat& image);
+
+}  // namespace moslam::weak

@@ -1,0 +1,58 @@
+// Localization cues from class activation maps (Zhou et al. 2016), refined with superpixels and
+// fused across the colour and grey classifiers: the modified cues of Sun, Tai, Gao, Liu, Yeung
+// 2019 (following SEC's seeds, Kolesnikov and Lampert 2016).
+//
+// Cue maps are CV_8UC1: a class index, or kUnknown where no cue is given (those pixels do not
+// enter the seeding loss).
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace moslam::weak {
+
+constexpr unsigned char kUnknown = 255;
+
+struct CueOptions {
+  // Foreground seeds: pixels where a present class's CAM, normalized by its maximum over the
+  // image, is at least `foreground_threshold` and is the largest among present classes.
+  float foreground_threshold = 0.5f;
+  // Background seeds (only when the dataset has a background class): pixels where every present
+  // class's normalized CAM is below `background_threshold`.
+  float background_threshold = 0.15f;
+  // SLIC superpixels (Achanta et al. 2012, OpenCV ximgproc): average side in pixels, compactness
+  // (ruler) and iterations.
+  int superpixel_size = 16;
+  float superpixel_ruler = 10.0f;
+  int superpixel_iterations = 10;
+  // A superpixel takes a label when at least `agreement` of its seeded pixels carry that label
+  // and at least `min_coverage` of its pixels are seeded; otherwise its seeds are dropped
+  // (superpixels straddling two labels are where seeds are least reliable).
+  float agreement = 0.8f;
+  float min_coverage = 0.1f;
+
+  void Check() const;  // InputError naming the field
+};
+
+// cams: {C, H, W} CV_32F class activation maps at the image's size (all classes of the
+// classifier); present: the image-level labels; background: index of the background class or -1.
+// Classes not present never receive seeds.
+cv::Mat SeedsFromCams(const cv::Mat& cams, const std::vector<int>& present, int background,
+                      const CueOptions& options);
+
+// SLIC superpixel refinement of `seeds` on `image` (CV_8UC3 or CV_8UC1 of the seeds' size).
+cv::Mat RefineWithSuperpixels(const cv::Mat& seeds, const cv::Mat& image,
+                              const CueOptions& options);
+
+// Fusion of the colour and grey cues: where both give a label and they agree, it is kept; where
+// they disagree the pixel becomes kUnknown; where only one gives a label, it is kept.
+cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey);
+
+// Pseudo-colour rendering for inspection: each class a fixed colour, unknown black, blended over
+// the image (CV_8UC3 output of the image's size).
+cv::Mat RenderCue(const cv::Mat& cue, const cv::Mat& image);
+// A CAM as a heat map over the image (JET colour map, CAM normalized by its maximum).
+cv::Mat RenderCam(const cv::Mat& cam, const cv::Mat& image);
+
+}  // namespace moslam::weak

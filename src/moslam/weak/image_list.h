@@ -1,0 +1,66 @@
+// Training data of the weakly supervised pipeline: images with image-level class labels only.
+//
+// Image-list format (UTF-8 text, one image per line; what `moslam synth --train` writes as
+// labels.txt, so its output is a ready training set):
+//   # comment
+//   <image path> <class name> <class name> ...
+// Paths are relative to the list file's folder unless absolute; names must be among the dataset's
+// classes (a classes file: `<id> <name> <movable 0|1>` per line, or a list of names given in code).
+// A line without class names is an image where none of the listed classes occurs.
+//
+// CamVid (Brostow et al. 2009, SegNet split in ../shared/data/camvid): image-level labels are
+// derived from the label PNGs — a class is present when it covers at least 0.1 % of the image (or
+// of a crop: crops are labelled by what they contain). The label PNG is read only for that
+// count; no pixel label ever reaches a loss (the `label_image` path is never handed to training
+// code other than through CropLabels()).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace moslam::weak {
+
+struct ImageListEntry {
+  std::string image;           // absolute or list-relative path, resolved when read
+  std::vector<int> classes;    // indices into ImageList::class_names, sorted, unique
+  // CamVid only: the id PNG from which crop labels are counted (never used as pixel supervision).
+  std::string label_image;
+};
+
+struct ImageList {
+  std::vector<std::string> class_names;
+  std::vector<bool> movable;  // per class
+  std::string background;     // name of the "none of the others" class, or empty
+  std::vector<ImageListEntry> entries;
+
+  int num_classes() const { return static_cast<int>(class_names.size()); }
+  int ClassIndex(const std::string& name) const;  // -1 when absent
+};
+
+// Reads a classes file (`<id> <name> <movable>`; ids must be 0..n-1 in order). A class named
+// "background" becomes ImageList::background and is not a label of the list.
+// InputError naming the file and line.
+ImageList ReadClassesFile(const std::string& path);
+
+// Reads an image list against `classes` (its class_names/movable/background are kept, entries
+// replaced). InputError naming the file, line and the unknown class or missing image.
+ImageList ReadImageList(const std::string& path, ImageList classes);
+void WriteImageList(const std::string& path, const ImageList& list);
+
+// CamVid: images in <root>/<split>/, labels in <root>/<split>annot/ (ids 0..11, 11 = unlabelled,
+// never a class). Classes are CamVid's 11 named classes in id order; Car, Pedestrian and
+// Bicyclist are movable; no background class. `min_fraction` of the image makes a class present.
+ImageList ReadCamVid(const std::string& root, const std::string& split,
+                     double min_fraction = 0.001);
+
+// Classes present in `roi` of a CamVid id image (pixels with id >= num_classes are ignored), by
+// the same `min_fraction` rule relative to the roi's area.
+std::vector<int> CropLabels(const cv::Mat& label_ids, const cv::Rect& roi, int num_classes,
+                            double min_fraction = 0.001);
+
+// The synthetic generator's training mode folder (rgb/, labels.txt, classes.txt).
+ImageList ReadSyntheticTraining(const std::string& folder);
+
+}  // namespace moslam::weak
