@@ -14,5 +14,6 @@ void AddRunCommand(CLI::App& app);
 void AddSynthCommand(CLI::App& app);
 void AddSegmentCommand(CLI::App& app);
 void AddVocabCommand(CLI::App& app);
+void AddTrainCommand(CLI::App& app);
 
 }  // namespace moslam::app

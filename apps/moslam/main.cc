@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   moslam::app::AddSynthCommand(app);
   moslam::app::AddSegmentCommand(app);
   moslam::app::AddVocabCommand(app);
+  moslam::app::AddTrainCommand(app);
 
   try {
     app.parse(argc, argv);

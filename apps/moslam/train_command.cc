@@ -1,0 +1,128 @@
+// `moslam train`: the weakly supervised segmentation pipeline (docs/WEAK.md), trained with
+// image-level labels only.
+//
+//   moslam train classifier --camvid DIR | --synthetic DIR | --list FILE --classes FILE
+//                           --out DIR [--grey] [--epochs 20] [--batch 8] [--lr 1e-3] ...
+//   moslam train cues       <data> --colour-model M --grey-model M --out DIR [--eval-labels DIR]
+//   moslam train segmenter  <data> --cues DIR --init-classifier M --out DIR [--epochs 20] ...
+// Every training command resumes from DIR/checkpoint.mnet with --resume.
+#include <string>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "commands.h"
+#include "moslam/util/error.h"
+#include "moslam/weak/training.h"
+
+namespace moslam::app {
+namespace {
+
+void AddDataOptions(CLI::App* cmd, weak::DataSource* data) {
+  cmd->add_option("--camvid", data->camvid, "CamVid root (train/, trainannot/, ...)");
+  cmd->add_option("--split", data->split, "CamVid split")->capture_default_str();
+  cmd->add_option("--synthetic", data->synthetic, "`moslam synth --train` output folder");
+  cmd->add_option("--list", data->list, "image list: `<image> <class> ...` per line");
+  cmd->add_option("--classes", data->classes, "classes file for --list: `<id> <name> <movable>`");
+}
+
+void AddCommonOptions(CLI::App* cmd, weak::CommonTrainOptions* o) {
+  AddDataOptions(cmd, &o->data);
+  cmd->add_option("--out", o->out, "output folder")->required();
+  cmd->add_option("--epochs", o->epochs, "epochs")->capture_default_str();
+  cmd->add_option("--batch", o->batch_size, "images per batch")->capture_default_str();
+  cmd->add_option("--lr", o->learning_rate, "Adam learning rate of new layers")
+      ->capture_default_str();
+  cmd->add_option("--backbone-lr-factor", o->backbone_lr_factor,
+                  "learning rate factor of the pretrained backbone")
+      ->capture_default_str();
+  cmd->add_option("--weight-decay", o->weight_decay, "L2 weight decay")->capture_default_str();
+  cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "libtorch intra-op threads")->capture_default_str();
+  cmd->add_flag("--resume", o->resume, "continue from OUT/checkpoint.mnet");
+  cmd->add_option("--max-images", o->max_images, "use only the first N images (0: all)")
+      ->capture_default_str();
+  cmd->add_option("--preview", o->preview_images, "images rendered into OUT/preview")
+      ->capture_default_str();
+  cmd->add_option("--width", o->augment.output_width, "network input width, pixels")
+      ->capture_default_str();
+  cmd->add_option("--height", o->augment.output_height, "network input height, pixels")
+      ->capture_default_str();
+  cmd->add_option("--min-scale", o->augment.min_scale, "smallest random crop (fraction of side)")
+      ->capture_default_str();
+  cmd->add_option("--crop-probability", o->augment.crop_probability, "chance of a random crop")
+      ->capture_default_str();
+}
+
+void AddBackboneOptions(CLI::App* cmd, net::NetConfig* net) {
+  cmd->add_option("--last-block", net->backbone.last_block, "last MobileNetV2 block (1-18)")
+      ->capture_default_str();
+  cmd->add_option("--output-stride", net->backbone.output_stride, "8, 16 or 32")
+      ->capture_default_str();
+  cmd->add_option("--frozen-blocks", net->backbone.frozen_blocks,
+                  "blocks 0..N-1 are not trained")
+      ->capture_default_str();
+}
+
+}  // namespace
+
+void AddTrainCommand(CLI::App& app) {
+  CLI::App* train = app.add_subcommand(
+      "train", "Weakly supervised segmentation: classifiers, cues, segmentation network");
+  train->require_subcommand(1);
+
+  static weak::ClassifierTrainOptions classifier;
+  CLI::App* c = train->add_subcommand("classifier", "multi-label classifier with CAMs");
+  AddCommonOptions(c, &classifier.common);
+  AddBackboneOptions(c, &classifier.net);
+  c->add_flag("--grey", classifier.net.grey, "train on grey images");
+  c->add_option("--imagenet", classifier.imagenet_weights,
+                "ImageNet MobileNetV2 TorchScript file ('none': random init; default: shared)");
+  c->callback([] { weak::TrainClassifier(classifier); });
+
+  static weak::CueGenerationOptions cues;
+  CLI::App* q = train->add_subcommand("cues", "seeds from CAMs, superpixels, colour+grey fusion");
+  AddDataOptions(q, &cues.data);
+  q->add_option("--colour-model", cues.colour_model, "colour classifier model file");
+  q->add_option("--grey-model", cues.grey_model, "grey classifier model file");
+  q->add_option("--out", cues.out, "output folder")->required();
+  q->add_option("--foreground-threshold", cues.cues.foreground_threshold,
+                "fraction of a CAM's maximum that seeds its class")
+      ->capture_default_str();
+  q->add_option("--background-threshold", cues.cues.background_threshold,
+                "background seeds where every present CAM is below this fraction")
+      ->capture_default_str();
+  q->add_option("--superpixel-size", cues.cues.superpixel_size, "SLIC region size, pixels")
+      ->capture_default_str();
+  q->add_option("--agreement", cues.cues.agreement, "superpixel vote needed to keep a label")
+      ->capture_default_str();
+  q->add_option("--threads", cues.threads, "libtorch intra-op threads")->capture_default_str();
+  q->add_option("--max-images", cues.max_images, "first N images only (0: all)");
+  q->add_option("--preview", cues.preview_images, "images rendered into OUT/preview")
+      ->capture_default_str();
+  q->add_option("--eval-labels", cues.eval_labels,
+                "pixel-label folder, read only to report the cues' precision");
+  q->callback([] { weak::GenerateCues(cues); });
+
+  static weak::SegmenterTrainOptions segmenter;
+  CLI::App* s = train->add_subcommand("segmenter", "segmentation network on the fused cues");
+  AddCommonOptions(s, &segmenter.common);
+  AddBackboneOptions(s, &segmenter.net);
+  s->add_option("--cues", segmenter.cues, "folder written by `moslam train cues`")->required();
+  s->add_option("--init-classifier", segmenter.init_classifier,
+                "initialize the backbone from this classifier model");
+  s->add_option("--imagenet", segmenter.imagenet_weights, "ImageNet weights when no classifier");
+  s->add_option("--constrain-weight", segmenter.constrain_weight,
+                "weight of the constrain-to-boundary loss")
+      ->capture_default_str();
+  s->add_option("--class-weight", segmenter.class_weight, "weight of the image-level BCE")
+      ->capture_default_str();
+  s->add_option("--grey-probability", segmenter.grey_probability,
+                "chance that a training image is made grey")
+      ->capture_default_str();
+  s->add_option("--head-channels", segmenter.net.head_channels, "ASPP channels")
+      ->capture_default_str();
+  s->callback([] { weak::TrainSegmenter(segmenter); });
+}
+
+}  // namespace moslam::app

@@ -1,0 +1,183 @@
+// TrainClassifier (training.h): multi-label classification with class activation maps.
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "moslam/net/model_file.h"
+#include "moslam/util/check.h"
+#include "moslam/util/error.h"
+#include "moslam/weak/training.h"
+#include "moslam/weak/training_loop.h"
+
+namespace moslam::weak {
+
+namespace fs = std::filesystem;
+
+namespace internal {
+
+cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<float>* scores) {
+  torch::NoGradGuard no_grad;
+  const torch::Tensor input = ToInputTensor(image).unsqueeze(0);
+  const net::ClassifierOutput out = net->forward(input);
+  const torch::Tensor cams =
+      torch::nn::functional::interpolate(
+          out.cams, torch::nn::functional::InterpolateFuncOptions()
+                        .size(std::vector<int64_t>{image.rows, image.cols})
+                        .mode(torch::kBilinear)
+                        .align_corners(false))
+          .squeeze(0)
+          .contiguous();
+  const int sizes[] = {static_cast<int>(cams.size(0)), image.rows, image.cols};
+  cv::Mat result(3, sizes, CV_32F);
+  std::memcpy(result.data, cams.data_ptr<float>(), cams.numel() * sizeof(float));
+  if (scores) {
+    const torch::Tensor s = torch::sigmoid(out.logits.squeeze(0)).contiguous();
+    scores->assign(s.data_ptr<float>(), s.data_ptr<float>() + s.numel());
+  }
+  return result;
+}
+
+cv::Mat SideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::string>& captions) {
+  MOSLAM_CHECK(!panels.empty());
+  const int height = panels[0].rows;
+  std::vector<cv::Mat> resized;
+  for (size_t i = 0; i < panels.size(); ++i) {
+    cv::Mat panel = panels[i];
+    if (panel.channels() == 1) cv::cvtColor(panel, panel, cv::COLOR_GRAY2BGR);
+    if (panel.rows != height) {
+      cv::resize(panel, panel, cv::Size(panel.cols * height / panel.rows, height));
+    } else {
+      panel = panel.clone();
+    }
+    if (i < captions.size()) {
+      cv::putText(panel, captions[i], {6, 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0),
+                  3, cv::LINE_AA);
+      cv::putText(panel, captions[i], {6, 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5,
+                  cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    }
+    resized.push_back(panel);
+  }
+  cv::Mat out;
+  cv::hconcat(resized, out);
+  return out;
+}
+
+}  // namespace internal
+
+namespace {
+
+ImageList LoadTrainingList(const CommonTrainOptions& options) {
+  ImageList list = options.data.Load();
+  if (options.max_images > 0 && static_cast<int>(list.entries.size()) > options.max_images) {
+    list.entries.resize(options.max_images);
+  }
+  return list;
+}
+
+net::ClassifierNet BuildClassifier(const ClassifierTrainOptions& options, const ImageList& list,
+                                   CommonTrainOptions* common) {
+  net::NetConfig config = options.net;
+  config.kind = net::NetKind::kClassifier;
+  config.classes = list.class_names;
+  config.movable.clear();
+  for (int c = 0; c < list.num_classes(); ++c) {
+    if (list.movable[c]) config.movable.push_back(list.class_names[c]);
+  }
+  config.background.clear();
+  config.input_width = common->augment.output_width;
+  config.input_height = common->augment.output_height;
+  common->augment.grey = config.grey;
+  config.Check();
+  net::ClassifierNet net(config);
+  if (options.imagenet_weights != "none") {
+    const std::string path = options.imagenet_weights.empty() ? net::DefaultImageNetWeightsPath()
+                                                              : options.imagenet_weights;
+    net::LoadImageNetWeights(path, net->backbone());
+    net->backbone()->ApplyFreezing();
+  }
+  return net;
+}
+
+void WritePreviews(net::ClassifierNet& net, const ImageList& list,
+                   const CommonTrainOptions& options) {
+  const std::string folder = (fs::path(options.out) / "preview").string();
+  internal::MakeFolder(folder);
+  net->eval();
+  std::mt19937_64 rng(options.seed);
+  const int count = std::min<int>(options.preview_images, list.entries.size());
+  for (int i = 0; i < count; ++i) {
+    const Sample sample = LoadSample(list, i, options.augment, rng, /*augment=*/false);
+    std::vector<float> scores;
+    const cv::Mat cams = internal::ComputeCams(net, sample.image, &scores);
+    std::vector<cv::Mat> panels = {sample.image};
+    std::vector<std::string> captions = {"image"};
+    for (int c : sample.classes) {
+      panels.push_back(RenderCam(semantic::LabelPlane(cams, c), sample.image));
+      captions.push_back(fmt::format("{} {:.2f}", list.class_names[c], scores[c]));
+    }
+    cv::imwrite(fmt::format("{}/cam_{:04d}.jpg", folder, i),
+                internal::SideBySide(panels, captions));
+  }
+}
+
+}  // namespace
+
+TrainSummary TrainClassifier(const ClassifierTrainOptions& options_in) {
+  ClassifierTrainOptions options = options_in;
+  CommonTrainOptions& common = options.common;
+  common.Check();
+  at::set_num_threads(common.threads);
+  torch::manual_seed(common.seed);
+  const ImageList list = LoadTrainingList(common);
+  net::ClassifierNet net = BuildClassifier(options, list, &common);
+  auto optimizer = internal::MakeOptimizer(*net->backbone(), *net, common);
+  spdlog::info("classifier ({}): {} images, {} classes, input {}x{}, {} epochs of batch {}",
+               net->config().grey ? "grey" : "colour", list.entries.size(), list.num_classes(),
+               net->config().input_width, net->config().input_height, common.epochs,
+               common.batch_size);
+
+  internal::LoopSpec spec;
+  spec.name = net->config().grey ? "classifier (grey)" : "classifier (colour)";
+  spec.num_images = static_cast<int>(list.entries.size());
+  spec.net = net.ptr().get();
+  spec.config = &net->config();
+  spec.optimizer = optimizer.get();
+  spec.step = [&](const std::vector<int>& indices, std::mt19937_64& rng) {
+    std::vector<Sample> samples;
+    for (int i : indices) samples.push_back(LoadSample(list, i, common.augment, rng, true));
+    const Batch batch = MakeBatch(samples, list.num_classes());
+    const net::ClassifierOutput out = net->forward(batch.images);
+    const torch::Tensor loss =
+        torch::binary_cross_entropy_with_logits(out.logits, batch.labels);
+    optimizer->zero_grad();
+    loss.backward();
+    optimizer->step();
+    internal::StepStats stats;
+    stats.loss = loss.item<double>();
+    const torch::Tensor predicted = (out.logits.detach() > 0).to(torch::kFloat);
+    stats.correct = predicted.eq(batch.labels).sum().item<double>();
+    stats.count = static_cast<double>(batch.labels.numel());
+    stats.images = static_cast<int>(indices.size());
+    return stats;
+  };
+  spec.save_model = [&](const std::string& path) { net::SaveClassifier(path, net); };
+  const TrainSummary summary = internal::RunTrainingLoop(common, spec);
+  WritePreviews(net, list, common);
+  nlohmann::json report = {{"kind", "classifier"},
+                           {"model", summary.model},
+                           {"config", net::ToJson(net->config())},
+                           {"images", list.entries.size()},
+                           {"epochs", summary.epochs},
+                           {"final_loss", summary.final_loss},
+                           {"seconds_this_run", summary.seconds}};
+  std::ofstream(fs::path(common.out) / "report.json") << report.dump(2) << "\n";
+  spdlog::info("classifier written to {} ({:.0f} s)", summary.model, summary.seconds);
+  return summary;
+}
+
+}  // namespace moslam::weak

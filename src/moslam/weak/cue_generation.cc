@@ -1,0 +1,200 @@
+// GenerateCues (training.h): class activation maps of the colour and grey classifiers turned into
+// seeds, refined with superpixels and fused (Sun, Tai, Gao, Liu, Yeung 2019).
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "moslam/net/model_file.h"
+#include "moslam/util/error.h"
+#include "moslam/util/progress.h"
+#include "moslam/weak/training.h"
+#include "moslam/weak/training_loop.h"
+
+namespace moslam::weak {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CueModel {
+  net::ClassifierNet net{nullptr};
+  std::string name;  // "colour" or "grey"
+};
+
+std::vector<CueModel> LoadModels(const CueGenerationOptions& options, const ImageList& list) {
+  std::vector<CueModel> models;
+  for (const auto& [path, name] :
+       {std::pair{options.colour_model, "colour"}, std::pair{options.grey_model, "grey"}}) {
+    if (path.empty()) continue;
+    CueModel model{net::LoadClassifier(path), name};
+    if (model.net->config().classes != list.class_names) {
+      throw InputError(fmt::format("{} classifier {} has classes [{}], the data has [{}]", name,
+                                   path, fmt::join(model.net->config().classes, ", "),
+                                   fmt::join(list.class_names, ", ")));
+    }
+    model.net->eval();
+    models.push_back(std::move(model));
+  }
+  if (models.empty()) throw InputError("cues: give --colour-model and/or --grey-model");
+  return models;
+}
+
+// Label id -> segmenter class index (-1: not counted) for reporting the cues' precision: CamVid
+// ids are the class indices; synthetic ids are mapped by name through its classes.txt.
+std::vector<int> EvalMapping(const CueGenerationOptions& options,
+                             const std::vector<std::string>& seg_classes) {
+  if (!options.data.camvid.empty()) {
+    std::vector<int> mapping(256, -1);
+    for (size_t i = 0; i < seg_classes.size(); ++i) mapping[i] = static_cast<int>(i);
+    return mapping;
+  }
+  if (!options.data.synthetic.empty()) {
+    const ImageList classes = ReadClassesFile(options.data.synthetic + "/classes.txt");
+    std::vector<int> mapping(256, -1);
+    std::vector<std::string> names = classes.class_names;
+    // ReadClassesFile keeps the background out of the labels; its id is 0 in the generator.
+    if (!classes.background.empty()) names.insert(names.begin(), classes.background);
+    for (size_t id = 0; id < names.size(); ++id) {
+      for (size_t c = 0; c < seg_classes.size(); ++c) {
+        if (seg_classes[c] == names[id]) mapping[id] = static_cast<int>(c);
+      }
+    }
+    return mapping;
+  }
+  return {};
+}
+
+struct CueStats {
+  double pixels = 0, seeded = 0, correct = 0, labelled_seeded = 0;
+  std::map<int, double> per_class_seeded, per_class_correct;
+};
+
+void AddEvaluation(const cv::Mat& cue, const cv::Mat& labels, const std::vector<int>& mapping,
+                   CueStats* stats) {
+  for (int y = 0; y < cue.rows; ++y) {
+    for (int x = 0; x < cue.cols; ++x) {
+      const int c = cue.at<uint8_t>(y, x);
+      if (c == kUnknown) continue;
+      const int truth = mapping[labels.at<uint8_t>(y, x)];
+      if (truth < 0) continue;
+      stats->labelled_seeded += 1;
+      stats->per_class_seeded[c] += 1;
+      if (truth == c) {
+        stats->correct += 1;
+        stats->per_class_correct[c] += 1;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void GenerateCues(const CueGenerationOptions& options) {
+  options.data.Check();
+  options.cues.Check();
+  at::set_num_threads(options.threads);
+  ImageList list = options.data.Load();
+  if (options.max_images > 0 && static_cast<int>(list.entries.size()) > options.max_images) {
+    list.entries.resize(options.max_images);
+  }
+  std::vector<CueModel> models = LoadModels(options, list);
+  const std::vector<std::string> seg_classes = SegmenterClasses(list);
+  const int background = list.background.empty() ? -1 : list.num_classes();
+  const net::NetConfig& config = models[0].net->config();
+  AugmentOptions resize;
+  resize.output_width = config.input_width;
+  resize.output_height = config.input_height;
+  const std::string cue_folder = (fs::path(options.out) / "cues").string();
+  const std::string preview_folder = (fs::path(options.out) / "preview").string();
+  internal::MakeFolder(cue_folder);
+  internal::MakeFolder(preview_folder);
+  const std::vector<int> mapping =
+      options.eval_labels.empty() ? std::vector<int>{} : EvalMapping(options, seg_classes);
+
+  CueStats stats;
+  std::vector<double> class_pixels(seg_classes.size(), 0.0);
+  Progress progress("cues", list.entries.size(), 10.0, "img");
+  std::mt19937_64 rng(1);
+  for (size_t i = 0; i < list.entries.size(); ++i) {
+    const Sample sample = LoadSample(list, static_cast<int>(i), resize, rng, false);
+    std::vector<cv::Mat> refined, panels = {sample.image};
+    std::vector<std::string> captions = {"image"};
+    for (CueModel& model : models) {
+      cv::Mat input = sample.image;
+      if (model.net->config().grey) {
+        cv::Mat grey;
+        cv::cvtColor(sample.image, grey, cv::COLOR_BGR2GRAY);
+        cv::cvtColor(grey, input, cv::COLOR_GRAY2BGR);
+      }
+      const cv::Mat cams = internal::ComputeCams(model.net, input, nullptr);
+      const cv::Mat seeds = SeedsFromCams(cams, sample.classes, background, options.cues);
+      refined.push_back(RefineWithSuperpixels(seeds, input, options.cues));
+      if (static_cast<int>(i) < options.preview_images) {
+        for (int c : sample.classes) {
+          if (list.movable[c]) {
+            panels.push_back(RenderCam(semantic::LabelPlane(cams, c), input));
+            captions.push_back(model.name + " CAM " + list.class_names[c]);
+          }
+        }
+        panels.push_back(RenderCue(seeds, input));
+        captions.push_back(model.name + " seeds");
+        panels.push_back(RenderCue(refined.back(), input));
+        captions.push_back(model.name + " superpixels");
+      }
+    }
+    const cv::Mat fused = refined.size() == 2 ? FuseCues(refined[0], refined[1]) : refined[0];
+    const cv::Mat original = cv::imread(list.entries[i].image, cv::IMREAD_UNCHANGED);
+    if (original.empty()) throw InputError("cannot read " + list.entries[i].image);
+    cv::Mat cue;
+    cv::resize(fused, cue, original.size(), 0, 0, cv::INTER_NEAREST);
+    cv::imwrite(fmt::format("{}/{:06d}.png", cue_folder, i), cue);
+    stats.pixels += cue.total();
+    for (int y = 0; y < cue.rows; ++y) {
+      for (int x = 0; x < cue.cols; ++x) {
+        const int c = cue.at<uint8_t>(y, x);
+        if (c != kUnknown) {
+          stats.seeded += 1;
+          class_pixels[c] += 1;
+        }
+      }
+    }
+    if (!mapping.empty()) {
+      const std::string label_path =
+          (fs::path(options.eval_labels) / fs::path(list.entries[i].image).filename()).string();
+      const cv::Mat labels = cv::imread(label_path, cv::IMREAD_GRAYSCALE);
+      if (labels.size() == cue.size()) AddEvaluation(cue, labels, mapping, &stats);
+    }
+    if (static_cast<int>(i) < options.preview_images) {
+      panels.push_back(RenderCue(fused, sample.image));
+      captions.push_back("fused");
+      cv::imwrite(fmt::format("{}/cues_{:04d}.jpg", preview_folder, i),
+                  internal::SideBySide(panels, captions));
+    }
+    progress.Update(i + 1);
+  }
+  progress.Finish();
+  nlohmann::json report = {{"classes", seg_classes},
+                           {"images", list.entries.size()},
+                           {"models", {options.colour_model, options.grey_model}},
+                           {"seeded_fraction", stats.seeded / std::max(1.0, stats.pixels)}};
+  for (size_t c = 0; c < seg_classes.size(); ++c) {
+    report["class_fraction"][seg_classes[c]] = class_pixels[c] / std::max(1.0, stats.pixels);
+  }
+  if (stats.labelled_seeded > 0) {
+    report["precision"] = stats.correct / stats.labelled_seeded;
+    for (const auto& [c, n] : stats.per_class_seeded) {
+      report["class_precision"][seg_classes[c]] = stats.per_class_correct[c] / n;
+    }
+    spdlog::info("cues: {:.1f} % of pixels seeded, precision {:.3f} against the pixel labels",
+                 100.0 * stats.seeded / stats.pixels, stats.correct / stats.labelled_seeded);
+  }
+  std::ofstream(fs::path(options.out) / "cues.json") << report.dump(2) << "\n";
+}
+
+}  // namespace moslam::weak

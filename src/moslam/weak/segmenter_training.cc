@@ -1,0 +1,226 @@
+// TrainSegmenter (training.h): the segmentation network trained on fused cues with the seeding
+// and constrain-to-boundary losses of SEC (Kolesnikov and Lampert 2016), as Sun et al. 2019 do.
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "moslam/net/model_file.h"
+#include "moslam/util/error.h"
+#include "moslam/weak/losses.h"
+#include "moslam/weak/training.h"
+#include "moslam/weak/training_loop.h"
+
+namespace moslam::weak {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string CuePath(const std::string& folder, int index) {
+  return fmt::format("{}/cues/{:06d}.png", folder, index);
+}
+
+void CheckCues(const SegmenterTrainOptions& options, const ImageList& list) {
+  const fs::path report = fs::path(options.cues) / "cues.json";
+  if (!fs::exists(report)) {
+    throw InputError("segmenter: " + report.string() + " not found (run `moslam train cues`)");
+  }
+  const nlohmann::json cues = nlohmann::json::parse(std::ifstream(report));
+  const auto classes = cues.at("classes").get<std::vector<std::string>>();
+  if (classes != SegmenterClasses(list)) {
+    throw InputError(fmt::format("segmenter: cues in {} are for classes [{}], the data has [{}]",
+                                 options.cues, fmt::join(classes, ", "),
+                                 fmt::join(SegmenterClasses(list), ", ")));
+  }
+  if (cues.at("images").get<size_t>() < list.entries.size()) {
+    throw InputError(fmt::format("segmenter: {} has cues for {} images, the data has {}",
+                                 options.cues, cues.at("images").get<size_t>(),
+                                 list.entries.size()));
+  }
+}
+
+// Copies the backbone weights of a trained classifier (same backbone options required).
+void InitFromClassifier(const std::string& path, net::SegmenterNet& net) {
+  net::ClassifierNet classifier = net::LoadClassifier(path);
+  const auto& a = classifier->config().backbone;
+  const auto& b = net->config().backbone;
+  if (a.last_block != b.last_block || a.output_stride != b.output_stride) {
+    throw InputError(fmt::format(
+        "segmenter: classifier {} has backbone last_block {} stride {}, the segmenter {} {}", path,
+        a.last_block, a.output_stride, b.last_block, b.output_stride));
+  }
+  torch::NoGradGuard no_grad;
+  auto source = classifier->backbone()->named_parameters();
+  for (auto& item : net->backbone()->named_parameters()) {
+    item.value().copy_(source[item.key()]);
+  }
+}
+
+net::SegmenterNet BuildSegmenter(const SegmenterTrainOptions& options, const ImageList& list,
+                                 CommonTrainOptions* common) {
+  net::NetConfig config = options.net;
+  config.kind = net::NetKind::kSegmenter;
+  config.classes = SegmenterClasses(list);
+  config.background = list.background;
+  config.movable.clear();
+  for (int c = 0; c < list.num_classes(); ++c) {
+    if (list.movable[c]) config.movable.push_back(list.class_names[c]);
+  }
+  config.input_width = common->augment.output_width;
+  config.input_height = common->augment.output_height;
+  config.grey = false;
+  common->augment.grey = false;
+  config.Check();
+  net::SegmenterNet net(config);
+  if (!options.init_classifier.empty()) {
+    InitFromClassifier(options.init_classifier, net);
+  } else if (options.imagenet_weights != "none") {
+    net::LoadImageNetWeights(options.imagenet_weights.empty() ? net::DefaultImageNetWeightsPath()
+                                                              : options.imagenet_weights,
+                             net->backbone());
+  }
+  net->backbone()->ApplyFreezing();
+  return net;
+}
+
+semantic::DenseCrfOptions ScaledCrf(semantic::DenseCrfOptions crf, double factor) {
+  crf.smoothness_sxy = std::max(0.5f, static_cast<float>(crf.smoothness_sxy / factor));
+  crf.appearance_sxy = std::max(0.5f, static_cast<float>(crf.appearance_sxy / factor));
+  crf.depth_sxy = std::max(0.5f, static_cast<float>(crf.depth_sxy / factor));
+  crf.depth = false;
+  crf.num_threads = 1;
+  crf.Check();
+  return crf;
+}
+
+cv::Mat LabelsToMat(const torch::Tensor& labels) {
+  const torch::Tensor l = labels.to(torch::kUInt8).contiguous();
+  cv::Mat out(static_cast<int>(l.size(0)), static_cast<int>(l.size(1)), CV_8U);
+  std::memcpy(out.data, l.data_ptr<uint8_t>(), l.numel());
+  return out;
+}
+
+void WritePreviews(net::SegmenterNet& net, const ImageList& list,
+                   const SegmenterTrainOptions& options, const AugmentOptions& resize) {
+  const std::string folder = (fs::path(options.common.out) / "preview").string();
+  internal::MakeFolder(folder);
+  net->eval();
+  torch::NoGradGuard no_grad;
+  std::mt19937_64 rng(options.common.seed);
+  const int count = std::min<int>(options.common.preview_images, list.entries.size());
+  for (int i = 0; i < count; ++i) {
+    const Sample s = LoadSample(list, i, resize, rng, false, CuePath(options.cues, i));
+    const torch::Tensor logits = net->forward(ToInputTensor(s.image).unsqueeze(0)).logits;
+    const torch::Tensor up = torch::nn::functional::interpolate(
+        logits, torch::nn::functional::InterpolateFuncOptions()
+                    .size(std::vector<int64_t>{s.image.rows, s.image.cols})
+                    .mode(torch::kBilinear)
+                    .align_corners(false));
+    const cv::Mat prediction = LabelsToMat(up.squeeze(0).argmax(0));
+    cv::imwrite(fmt::format("{}/seg_{:04d}.jpg", folder, i),
+                internal::SideBySide({s.image, RenderCue(s.cue, s.image),
+                                      RenderCue(prediction, s.image)},
+                                     {"image", "fused cue", "prediction"}));
+  }
+}
+
+}  // namespace
+
+TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
+  SegmenterTrainOptions options = options_in;
+  CommonTrainOptions& common = options.common;
+  common.Check();
+  if (options.cues.empty()) throw InputError("segmenter: --cues (a cue folder) is required");
+  if (options.grey_probability < 0 || options.grey_probability > 1) {
+    throw InputError("segmenter: grey_probability must be in [0, 1]");
+  }
+  at::set_num_threads(common.threads);
+  torch::manual_seed(common.seed);
+  ImageList list = common.data.Load();
+  if (common.max_images > 0 && static_cast<int>(list.entries.size()) > common.max_images) {
+    list.entries.resize(common.max_images);
+  }
+  CheckCues(options, list);
+  net::SegmenterNet net = BuildSegmenter(options, list, &common);
+  const int num_classes = net->config().num_classes();
+  const int background = net->config().BackgroundIndex();
+  auto optimizer = internal::MakeOptimizer(*net->backbone(), *net, common);
+  std::unique_ptr<semantic::DenseCrf> crf;
+  spdlog::info("segmenter: {} images, classes [{}], input {}x{}, {} epochs of batch {}",
+               list.entries.size(), fmt::join(net->config().classes, ", "),
+               net->config().input_width, net->config().input_height, common.epochs,
+               common.batch_size);
+
+  internal::LoopSpec spec;
+  spec.name = "segmenter";
+  spec.num_images = static_cast<int>(list.entries.size());
+  spec.net = net.ptr().get();
+  spec.config = &net->config();
+  spec.optimizer = optimizer.get();
+  spec.step = [&](const std::vector<int>& indices, std::mt19937_64& rng) {
+    std::vector<Sample> samples;
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    for (int i : indices) {
+      samples.push_back(LoadSample(list, i, common.augment, rng, true, CuePath(options.cues, i)));
+      if (uniform(rng) < options.grey_probability) {
+        cv::Mat grey;
+        cv::cvtColor(samples.back().image, grey, cv::COLOR_BGR2GRAY);
+        cv::cvtColor(grey, samples.back().image, cv::COLOR_GRAY2BGR);
+      }
+    }
+    Batch batch = MakeBatch(samples, num_classes);
+    if (background >= 0) batch.labels.select(1, background).fill_(1.0);
+    const net::SegmenterOutput out = net->forward(batch.images);
+    const int64_t h = out.logits.size(2), w = out.logits.size(3);
+    if (!crf) {
+      crf = std::make_unique<semantic::DenseCrf>(
+          ScaledCrf(options.crf, static_cast<double>(batch.images.size(3)) / w));
+    }
+    const torch::Tensor cues = DownsampleCues(batch.cues, h, w);
+    const torch::Tensor seed = SeedingLoss(out.logits, cues);
+    const torch::Tensor constrain = ConstrainLoss(out.logits, CrfTargets(out.logits, batch.bgr, *crf));
+    const torch::Tensor classes =
+        torch::binary_cross_entropy_with_logits(out.class_logits, batch.labels);
+    const torch::Tensor loss =
+        seed + options.constrain_weight * constrain + options.class_weight * classes;
+    optimizer->zero_grad();
+    loss.backward();
+    optimizer->step();
+    internal::StepStats stats;
+    stats.loss = loss.item<double>();
+    stats.parts = {{"seed", seed.item<double>()},
+                   {"constrain", constrain.item<double>()},
+                   {"class", classes.item<double>()}};
+    const torch::Tensor seeded = cues.ne(kUnknown);
+    stats.correct =
+        (out.logits.detach().argmax(1).eq(cues) & seeded).sum().item<double>();
+    stats.count = seeded.sum().item<double>();
+    stats.images = static_cast<int>(indices.size());
+    return stats;
+  };
+  spec.save_model = [&](const std::string& path) { net::SaveSegmenter(path, net, true); };
+  const TrainSummary summary = internal::RunTrainingLoop(common, spec);
+  AugmentOptions resize = common.augment;
+  WritePreviews(net, list, options, resize);
+  nlohmann::json report = {{"kind", "segmenter"},
+                           {"model", summary.model},
+                           {"config", net::ToJson(net->config())},
+                           {"images", list.entries.size()},
+                           {"epochs", summary.epochs},
+                           {"final_loss", summary.final_loss},
+                           {"constrain_weight", options.constrain_weight},
+                           {"class_weight", options.class_weight},
+                           {"grey_probability", options.grey_probability},
+                           {"seconds_this_run", summary.seconds}};
+  std::ofstream(fs::path(common.out) / "report.json") << report.dump(2) << "\n";
+  spdlog::info("segmenter written to {} ({:.0f} s)", summary.model, summary.seconds);
+  return summary;
+}
+
+}  // namespace moslam::weak

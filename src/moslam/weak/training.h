@@ -1,0 +1,108 @@
+// Training loops of the weakly supervised pipeline (`moslam train classifier|cues|segmenter`):
+//   1. TrainClassifier: multi-label classifier (sigmoid + binary cross-entropy on image-level
+//      labels), once on colour and once on grey images;
+//   2. GenerateCues: CAMs of both classifiers -> seeds -> superpixel refinement -> fusion;
+//   3. TrainSegmenter: segmentation network with the seeding and constrain-to-boundary losses
+//      (losses.h), plus the auxiliary image-level classifier used for test-time suppression.
+// Every loop shows progress (loss, accuracy, images/s, ETA), writes a checkpoint after every epoch
+// (resumable: the same command with `resume` continues from it), a training-curve PNG, a JSON
+// report and inspectable images.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "moslam/net/networks.h"
+#include "moslam/semantic/dense_crf.h"
+#include "moslam/weak/augment.h"
+#include "moslam/weak/cues.h"
+#include "moslam/weak/image_list.h"
+
+namespace moslam::weak {
+
+// Class order of the segmentation network and of cue maps: the classifier's classes (the list's
+// class_names) followed by the list's background class when it has one (synthetic data), so a
+// seed's value is a classifier class index, or num_classes for background.
+std::vector<std::string> SegmenterClasses(const ImageList& list);
+
+// Where training images come from: exactly one of the three.
+struct DataSource {
+  std::string list;       // an image list (image_list.h); `classes` names its classes file
+  std::string classes;    // classes file for `list`
+  std::string camvid;     // CamVid root (ReadCamVid), with `split`
+  std::string split = "train";
+  std::string synthetic;  // a `moslam synth --train` folder
+
+  void Check() const;  // InputError when none or several are set
+  ImageList Load() const;
+};
+
+struct CommonTrainOptions {
+  DataSource data;
+  std::string out;          // output folder (created)
+  int epochs = 20;
+  int batch_size = 8;
+  double learning_rate = 1e-3;   // Adam; the pretrained backbone gets backbone_lr_factor of it
+  double backbone_lr_factor = 0.1;
+  double weight_decay = 1e-5;
+  uint64_t seed = 1;
+  int threads = 2;          // at::set_num_threads
+  bool resume = false;      // continue from out/checkpoint.mnet when it exists
+  int max_images = 0;       // use only the first N images (0 = all): quick runs and tests
+  int preview_images = 6;   // images rendered into out/preview/ after training
+  AugmentOptions augment;
+
+  void Check() const;
+};
+
+struct ClassifierTrainOptions {
+  CommonTrainOptions common;
+  net::NetConfig net;            // classes are filled from the data
+  std::string imagenet_weights;  // empty: net::DefaultImageNetWeightsPath(); "none": random init
+};
+
+struct CueGenerationOptions {
+  DataSource data;
+  std::string colour_model;  // classifier model files; either may be empty (one cue only)
+  std::string grey_model;
+  // out/cues/<index>.png (CV_8U class indices of the segmenter's classes, kUnknown elsewhere, at
+  // the image's size), out/cues.json (classes, options, statistics), out/preview/.
+  std::string out;
+  CueOptions cues;
+  int threads = 2;
+  int max_images = 0;
+  int preview_images = 12;
+  // Optional: pixel-label folder used only to report the cues' precision (evaluation).
+  std::string eval_labels;
+};
+
+struct SegmenterTrainOptions {
+  CommonTrainOptions common;
+  net::NetConfig net;
+  std::string cues;              // folder written by GenerateCues
+  std::string init_classifier;   // backbone initialized from this classifier (else ImageNet)
+  std::string imagenet_weights;
+  double constrain_weight = 1.0;  // weight of the constrain-to-boundary loss
+  double class_weight = 0.1;      // weight of the auxiliary image-level BCE
+  // Probability that a training image is turned grey (replicated to three channels), so that one
+  // network serves colour and grey cameras (KITTI odometry's cameras 0 and 1 are grey).
+  double grey_probability = 0.3;
+  // The CRF of the constrain loss, with its spatial standard deviations (sxy) in pixels of the
+  // network input; they are divided by the output stride, since the CRF runs at the logits'
+  // resolution (as SEC does).
+  semantic::DenseCrfOptions crf;
+};
+
+struct TrainSummary {
+  std::string model;   // path of the final model
+  int epochs = 0;
+  double final_loss = 0.0;
+  double seconds = 0.0;
+};
+
+TrainSummary TrainClassifier(const ClassifierTrainOptions& options);
+void GenerateCues(const CueGenerationOptions& options);
+TrainSummary TrainSegmenter(const SegmenterTrainOptions& options);
+
+}  // namespace moslam::weak
