@@ -1,0 +1,186 @@
+// The training loops end to end on a toy task: red squares and blue discs on noise. A randomly
+// initialized classifier must learn which shapes an image contains, its class activation maps
+// must peak on the shapes, and cues and a segmenter must come out of the same command sequence.
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "moslam/net/model_file.h"
+#include "moslam/testing/shared_data.h"
+#include "moslam/weak/training.h"
+#include "moslam/weak/training_loop.h"
+
+namespace moslam::weak {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ToyImage {
+  bool square = false, disc = false;
+  cv::Rect square_box, disc_box;
+};
+
+// Writes `count` 64x48 images, their image list, classes file and (for evaluating cues only)
+// label images: 0 background, 1 square, 2 disc.
+std::vector<ToyImage> WriteToyData(const std::string& folder, int count) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> noise(60, 160), x(4, 36), y(4, 24);
+  fs::create_directories(folder + "/images");
+  fs::create_directories(folder + "/labels");
+  std::ofstream list(folder + "/list.txt");
+  std::ofstream(folder + "/classes.txt") << "0 background 0\n1 square 1\n2 disc 0\n";
+  std::vector<ToyImage> toys;
+  for (int i = 0; i < count; ++i) {
+    cv::Mat image(48, 64, CV_8UC3), labels(48, 64, CV_8U, cv::Scalar(0));
+    for (int p = 0; p < image.rows * image.cols; ++p) {
+      image.at<cv::Vec3b>(p / 64, p % 64) = cv::Vec3b(noise(rng), noise(rng), noise(rng));
+    }
+    ToyImage toy;
+    toy.square = (i % 4 == 0 || i % 4 == 1);
+    toy.disc = (i % 4 == 1 || i % 4 == 2);
+    std::string classes;
+    if (toy.square) {
+      toy.square_box = cv::Rect(x(rng), y(rng), 16, 16);
+      cv::rectangle(image, toy.square_box, cv::Scalar(20, 20, 230), cv::FILLED);
+      labels(toy.square_box).setTo(1);
+      classes += " square";
+    }
+    if (toy.disc) {
+      toy.disc_box = cv::Rect(x(rng), y(rng), 16, 16);
+      const cv::Point centre(toy.disc_box.x + 8, toy.disc_box.y + 8);
+      cv::circle(image, centre, 8, cv::Scalar(230, 40, 20), cv::FILLED);
+      cv::circle(labels, centre, 8, cv::Scalar(2), cv::FILLED);
+      classes += " disc";
+    }
+    const std::string name = fmt::format("{:03d}.png", i);
+    cv::imwrite(folder + "/images/" + name, image);
+    cv::imwrite(folder + "/labels/" + name, labels);
+    list << "images/" << name << classes << "\n";
+    toys.push_back(toy);
+  }
+  return toys;
+}
+
+CommonTrainOptions ToyOptions(const std::string& folder, const std::string& out) {
+  CommonTrainOptions o;
+  o.data.list = folder + "/list.txt";
+  o.data.classes = folder + "/classes.txt";
+  o.out = out;
+  o.epochs = 12;
+  o.batch_size = 8;
+  o.learning_rate = 3e-3;
+  o.threads = 1;
+  o.preview_images = 2;
+  o.augment.output_width = 64;
+  o.augment.output_height = 48;
+  o.augment.crop_probability = 0.0;
+  return o;
+}
+
+ClassifierTrainOptions ToyClassifier(const std::string& folder, const std::string& out) {
+  ClassifierTrainOptions o;
+  o.common = ToyOptions(folder, out);
+  o.imagenet_weights = "none";  // random initialization: the toy task needs no pretraining
+  o.net.backbone.last_block = 6;  // 32 channels at stride 8
+  o.net.backbone.output_stride = 8;
+  return o;
+}
+
+class TrainingTest : public ::testing::Test {
+ protected:
+  testing::TempDir dir_;
+  std::string data_ = dir_.path() + "/data";
+  std::vector<ToyImage> toys_ = WriteToyData(data_, 32);
+};
+
+TEST_F(TrainingTest, ClassifierLearnsToyTaskAndCamsPeakOnObjects) {
+  const TrainSummary summary = TrainClassifier(ToyClassifier(data_, dir_.path() + "/cls"));
+  ASSERT_TRUE(fs::exists(summary.model));
+  EXPECT_TRUE(fs::exists(dir_.path() + "/cls/curve.png"));
+  EXPECT_TRUE(fs::exists(dir_.path() + "/cls/preview/cam_0000.jpg"));
+  net::ClassifierNet net = net::LoadClassifier(summary.model);
+  net->eval();
+  int correct = 0, total = 0, peaks_inside = 0, peaks = 0;
+  for (size_t i = 0; i < toys_.size(); ++i) {
+    const cv::Mat image = cv::imread(fmt::format("{}/images/{:03d}.png", data_, i));
+    std::vector<float> scores;
+    const cv::Mat cams = internal::ComputeCams(net, image, &scores);
+    const bool truth[2] = {toys_[i].square, toys_[i].disc};
+    const cv::Rect boxes[2] = {toys_[i].square_box, toys_[i].disc_box};
+    for (int c = 0; c < 2; ++c) {
+      correct += (scores[c] > 0.5f) == truth[c];
+      ++total;
+      if (!truth[c]) continue;
+      cv::Point peak;
+      cv::minMaxLoc(semantic::LabelPlane(cams, c), nullptr, nullptr, nullptr, &peak);
+      // The CAM is computed at stride 8 and upsampled: allow half a cell around the object.
+      const cv::Rect grown(boxes[c].x - 4, boxes[c].y - 4, boxes[c].width + 8,
+                           boxes[c].height + 8);
+      peaks_inside += grown.contains(peak);
+      ++peaks;
+    }
+  }
+  EXPECT_GE(correct, total * 95 / 100) << correct << " of " << total << " labels right";
+  EXPECT_GE(peaks_inside, peaks * 9 / 10) << peaks_inside << " of " << peaks << " CAM peaks";
+}
+
+TEST_F(TrainingTest, ResumeContinuesFromTheCheckpoint) {
+  ClassifierTrainOptions options = ToyClassifier(data_, dir_.path() + "/resume");
+  options.common.epochs = 2;
+  TrainClassifier(options);
+  options.common.epochs = 3;
+  options.common.resume = true;
+  TrainClassifier(options);
+  const nlohmann::json history =
+      nlohmann::json::parse(std::ifstream(dir_.path() + "/resume/history.json"));
+  ASSERT_EQ(history.size(), 3u);
+  EXPECT_EQ(history[2]["epoch"], 3);
+}
+
+TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
+  const TrainSummary classifier = TrainClassifier(ToyClassifier(data_, dir_.path() + "/cls"));
+  CueGenerationOptions cues;
+  cues.data.list = data_ + "/list.txt";
+  cues.data.classes = data_ + "/classes.txt";
+  cues.colour_model = classifier.model;
+  cues.out = dir_.path() + "/cues";
+  cues.cues.superpixel_size = 6;
+  cues.eval_labels = data_ + "/labels";
+  cues.preview_images = 2;
+  GenerateCues(cues);
+  const nlohmann::json report = nlohmann::json::parse(std::ifstream(cues.out + "/cues.json"));
+  EXPECT_THAT(report["classes"].get<std::vector<std::string>>(),
+              ::testing::ElementsAre("square", "disc", "background"));
+  EXPECT_GT(report["seeded_fraction"].get<double>(), 0.2);
+  EXPECT_TRUE(fs::exists(cues.out + "/cues/000031.png"));
+
+  SegmenterTrainOptions seg;
+  seg.common = ToyOptions(data_, dir_.path() + "/seg");
+  seg.common.epochs = 6;
+  seg.cues = cues.out;
+  seg.init_classifier = classifier.model;
+  seg.net.backbone.last_block = 6;
+  seg.net.backbone.output_stride = 8;
+  seg.net.head_channels = 16;
+  const TrainSummary summary = TrainSegmenter(seg);
+  ASSERT_TRUE(fs::exists(summary.model));
+  const nlohmann::json history =
+      nlohmann::json::parse(std::ifstream(dir_.path() + "/seg/history.json"));
+  ASSERT_EQ(history.size(), 6u);
+  EXPECT_LT(history[5]["parts"]["seed"].get<double>(),
+            history[0]["parts"]["seed"].get<double>());
+  const net::SegmenterNet net = net::LoadSegmenter(summary.model);
+  EXPECT_THAT(net->config().classes, ::testing::ElementsAre("square", "disc", "background"));
+  EXPECT_THAT(net->config().movable, ::testing::ElementsAre("square"));
+  EXPECT_EQ(net->config().background, "background");
+}
+
+}  // namespace
+}  // namespace moslam::weak
