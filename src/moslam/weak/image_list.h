@@ -23,8 +23,8 @@
 namespace moslam::weak {
 
 struct ImageListEntry {
-  std::string image;           // absolute or list-relative path, resolved when read
-  std::vector<int> classes;    // indices into ImageList::class_names, sorted, unique
+  std::string image;         // absolute or list-relative path, resolved when read
+  std::vector<int> classes;  // indices into ImageList::class_names, sorted, unique
   // CamVid only: the id PNG from which crop labels are counted (never used as pixel supervision).
   std::string label_image;
 };
@@ -34,6 +34,9 @@ struct ImageList {
   std::vector<bool> movable;  // per class
   std::string background;     // name of the "none of the others" class, or empty
   std::vector<ImageListEntry> entries;
+  // The rule by which entries with a label_image were labelled (ReadCamVid's min_fraction):
+  // crops are relabelled by the same rule (augment.h).
+  double label_min_fraction = 0.001;
 
   int num_classes() const { return static_cast<int>(class_names.size()); }
   int ClassIndex(const std::string& name) const;  // -1 when absent
@@ -44,10 +47,24 @@ struct ImageList {
 // InputError naming the file and line.
 ImageList ReadClassesFile(const std::string& path);
 
+// Writes `list`'s classes in ReadClassesFile's format (the background class first, as id 0,
+// when there is one: the synthetic generator's layout).
+void WriteClassesFile(const std::string& path, const ImageList& list);
+
 // Reads an image list against `classes` (its class_names/movable/background are kept, entries
-// replaced). InputError naming the file, line and the unknown class or missing image.
+// replaced). InputError naming the file, line and the unknown class or missing image. The image
+// path is the first whitespace-separated field (paths with spaces are not supported); a field
+// starting with '#' ends the line (a trailing comment); the background class's name is accepted
+// and ignored (it is implicitly present everywhere).
 ImageList ReadImageList(const std::string& path, ImageList classes);
+// Image paths are written relative to the list's folder when they lie below it, else absolute.
+// label_image is not part of the format (a written CamVid list keeps its whole-image labels only).
 void WriteImageList(const std::string& path, const ImageList& list);
+
+// Every `every`-th entry (1-based: entries every-1, 2*every-1, ...) when `holdout` is true, the
+// others when false: a deterministic split into training and held-out parts. every >= 2
+// (InputError otherwise).
+ImageList SplitHoldout(const ImageList& list, int every, bool holdout);
 
 // CamVid: images in <root>/<split>/, labels in <root>/<split>annot/ (ids 0..11, 11 = unlabelled,
 // never a class). Classes are CamVid's 11 named classes in id order; Car, Pedestrian and
