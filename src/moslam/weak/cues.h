@@ -26,11 +26,15 @@ struct CueOptions {
   int superpixel_size = 16;
   float superpixel_ruler = 10.0f;
   int superpixel_iterations = 10;
-  // A superpixel takes a label when at least `agreement` of its seeded pixels carry that label
-  // and at least `min_coverage` of its pixels are seeded; otherwise its seeds are dropped
-  // (superpixels straddling two labels are where seeds are least reliable).
+  // A superpixel takes a label (all its pixels) when at least `agreement` of its seeded pixels
+  // carry that label and at least `min_coverage` of its pixels are seeded; otherwise its seeds are
+  // dropped (superpixels straddling two labels are where seeds are least reliable). A high
+  // coverage makes the refinement snap seeds to object boundaries: a blurry CAM's spill into a
+  // neighbouring region covers only part of that region's superpixels, which are then dropped,
+  // while superpixels inside the object are filled. A low coverage would instead grow every
+  // superpixel the spill touches.
   float agreement = 0.8f;
-  float min_coverage = 0.1f;
+  float min_coverage = 0.8f;
 
   void Check() const;  // InputError naming the field
 };

@@ -1,0 +1,219 @@
+#include "moslam/weak/cues.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "moslam/util/error.h"
+
+namespace moslam::weak {
+namespace {
+
+constexpr int kSide = 128;
+constexpr int kClasses = 4;
+const cv::Point2f kCentre(60.0f, 66.0f);
+constexpr float kRadius = 28.0f;
+
+// A red disc on a green-grey textured background, with noise on both.
+cv::Mat DiscImage() {
+  cv::Mat image(kSide, kSide, CV_8UC3);
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> noise(-10, 10);
+  for (int y = 0; y < kSide; ++y) {
+    for (int x = 0; x < kSide; ++x) {
+      const bool inside = std::hypot(x - kCentre.x, y - kCentre.y) <= kRadius;
+      // Background texture: stripes plus noise, so superpixels cannot be trivial squares.
+      const int stripe = ((x / 5 + y / 7) % 2) * 25;
+      const cv::Vec3i base = inside ? cv::Vec3i(40, 40, 200) : cv::Vec3i(90 + stripe, 140, 100);
+      cv::Vec3b& p = image.at<cv::Vec3b>(y, x);
+      for (int k = 0; k < 3; ++k) p[k] = cv::saturate_cast<uchar>(base[k] + noise(rng));
+    }
+  }
+  return image;
+}
+
+bool InsideDisc(int x, int y, float margin) {
+  return std::hypot(x - kCentre.x, y - kCentre.y) <= kRadius + margin;
+}
+
+// CAMs {kClasses, kSide, kSide}: class 2 a blurry Gaussian peaked inside the disc (off its centre)
+// whose half-maximum level lies `spill` pixels beyond the disc's boundary; class 3 (not present in
+// the image-level labels) a strong blob in a corner; classes 0 and 1 negative everywhere.
+cv::Mat Cams(float spill = 5.0f) {
+  const int sizes[] = {kClasses, kSide, kSide};
+  cv::Mat cams(3, sizes, CV_32F, cv::Scalar(0));
+  const float half_max_radius = kRadius + spill;
+  const float sigma = half_max_radius / std::sqrt(2.0f * std::log(2.0f));
+  const cv::Point2f peak = kCentre + cv::Point2f(3.0f, -2.0f);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> negative(-0.5f, -0.01f);
+  for (int y = 0; y < kSide; ++y) {
+    for (int x = 0; x < kSide; ++x) {
+      const float d2 = (x - peak.x) * (x - peak.x) + (y - peak.y) * (y - peak.y);
+      cams.at<float>(2, y, x) = 5.0f * std::exp(-d2 / (2.0f * sigma * sigma));
+      cams.at<float>(3, y, x) =
+          9.0f * std::exp(-((x - 120) * (x - 120) + (y - 8) * (y - 8)) / 200.0f);
+      cams.at<float>(0, y, x) = negative(rng);
+      cams.at<float>(1, y, x) = negative(rng);
+    }
+  }
+  return cams;
+}
+
+struct Counts {
+  int inside = 0;           // class-2 seeds inside the disc
+  int outside = 0;          // class-2 seeds outside the disc
+  int far_outside = 0;      // class-2 seeds more than 2 px outside the disc
+  int disc_interior = 0;    // pixels at least 3 px inside the disc
+  int interior_seeded = 0;  // of those, seeded with class 2
+};
+
+Counts Count(const cv::Mat& seeds) {
+  Counts c;
+  for (int y = 0; y < seeds.rows; ++y) {
+    for (int x = 0; x < seeds.cols; ++x) {
+      const bool fg = seeds.at<uchar>(y, x) == 2;
+      if (InsideDisc(x, y, 0.0f)) {
+        c.inside += fg;
+      } else {
+        c.outside += fg;
+      }
+      c.far_outside += fg && !InsideDisc(x, y, 2.0f);
+      if (InsideDisc(x, y, -3.0f)) {
+        ++c.disc_interior;
+        c.interior_seeded += fg;
+      }
+    }
+  }
+  return c;
+}
+
+int CountLabel(const cv::Mat& seeds, int label) { return cv::countNonZero(seeds == label); }
+
+TEST(Cues, SuperpixelsKeepSeedsInsideTheObject) {
+  const cv::Mat image = DiscImage();
+  const CueOptions options;
+  for (float spill : {3.0f, 5.0f}) {
+    SCOPED_TRACE(spill);
+    const cv::Mat raw = SeedsFromCams(Cams(spill), {1, 2}, -1, options);
+    const Counts before = Count(raw);
+    // Precondition: the CAM's seeds spill over the disc's boundary.
+    ASSERT_GT(before.far_outside, 300);
+
+    const cv::Mat refined = RefineWithSuperpixels(raw, image, options);
+    const Counts after = Count(refined);
+    // Superpixels follow the disc's edge to within a pixel or two.
+    EXPECT_EQ(after.far_outside, 0);
+    EXPECT_GE(after.inside, 0.98 * (after.inside + after.outside));
+    EXPECT_GE(after.interior_seeded, 0.9 * after.disc_interior);
+    // Class 1's CAM is never positive and class 3 is not present: neither gets seeds; without a
+    // background class nothing else is labelled.
+    EXPECT_EQ(CountLabel(refined, 1) + CountLabel(raw, 1), 0);
+    EXPECT_EQ(CountLabel(refined, 3) + CountLabel(raw, 3), 0);
+    EXPECT_EQ(CountLabel(refined, 2) + CountLabel(refined, kUnknown), kSide * kSide);
+  }
+}
+
+TEST(Cues, BackgroundSeedsOnlyWithABackgroundClass) {
+  const cv::Mat cams = Cams();
+  const CueOptions options;
+  const cv::Mat without = SeedsFromCams(cams, {2}, -1, options);
+  EXPECT_EQ(CountLabel(without, 0), 0);
+  EXPECT_EQ(CountLabel(without, 2) + CountLabel(without, kUnknown), kSide * kSide);
+
+  // Class 0 as background, listed among the present classes as datasets with a background class
+  // do: its CAM is not used, its seeds are where every present CAM is weak.
+  const cv::Mat with = SeedsFromCams(cams, {0, 2}, 0, options);
+  int background_in_disc = 0;
+  for (int y = 0; y < kSide; ++y) {
+    for (int x = 0; x < kSide; ++x) {
+      background_in_disc += with.at<uchar>(y, x) == 0 && InsideDisc(x, y, 0.0f);
+    }
+  }
+  EXPECT_GT(CountLabel(with, 0), kSide * kSide / 4);
+  EXPECT_EQ(background_in_disc, 0);
+  EXPECT_EQ(CountLabel(with, 2), CountLabel(without, 2));
+  EXPECT_EQ(CountLabel(with, 3), 0);
+
+  const cv::Mat refined = RefineWithSuperpixels(with, DiscImage(), options);
+  EXPECT_GT(CountLabel(refined, 0), kSide * kSide / 4);
+  EXPECT_EQ(CountLabel(refined, 3), 0);
+}
+
+TEST(Cues, OnlyBackgroundWhenNoForegroundClassIsPresent) {
+  const cv::Mat seeds = SeedsFromCams(Cams(), {0}, 0, CueOptions());
+  EXPECT_EQ(CountLabel(seeds, 0), kSide * kSide);
+}
+
+TEST(Cues, ArgmaxAmongPresentClasses) {
+  // Two overlapping classes: each pixel goes to the larger normalized CAM.
+  const int sizes[] = {3, 1, 4};
+  cv::Mat cams(3, sizes, CV_32F, cv::Scalar(0));
+  const float a[] = {1.0f, 0.9f, 0.2f, 0.0f};  // max 1
+  const float b[] = {0.0f, 1.0f, 1.6f, 2.0f};  // max 2: normalized 0, 0.5, 0.8, 1
+  for (int x = 0; x < 4; ++x) {
+    cams.at<float>(0, 0, x) = a[x];
+    cams.at<float>(1, 0, x) = b[x];
+    cams.at<float>(2, 0, x) = 100.0f;  // not present
+  }
+  const cv::Mat seeds = SeedsFromCams(cams, {0, 1}, -1, CueOptions());
+  EXPECT_EQ(seeds.at<uchar>(0, 0), 0);
+  EXPECT_EQ(seeds.at<uchar>(0, 1), 0);  // 0.9 vs 0.5
+  EXPECT_EQ(seeds.at<uchar>(0, 2), 1);  // 0.2 vs 0.8
+  EXPECT_EQ(seeds.at<uchar>(0, 3), 1);
+}
+
+TEST(Cues, FusionKeepsAgreementAndOneSidedCuesAndDropsConflicts) {
+  const cv::Mat colour = (cv::Mat_<uchar>(1, 5) << 1, 1, kUnknown, 2, kUnknown);
+  const cv::Mat grey = (cv::Mat_<uchar>(1, 5) << 1, 3, 4, kUnknown, kUnknown);
+  const cv::Mat fused = FuseCues(colour, grey);
+  const cv::Mat expected = (cv::Mat_<uchar>(1, 5) << 1, kUnknown, 4, 2, kUnknown);
+  EXPECT_EQ(cv::countNonZero(fused != expected), 0);
+  EXPECT_THROW(FuseCues(colour, cv::Mat(2, 5, CV_8UC1)), InputError);
+}
+
+TEST(Cues, OptionsCheckNamesTheField) {
+  CueOptions options;
+  EXPECT_NO_THROW(options.Check());
+  options.min_coverage = 0.0f;
+  try {
+    options.Check();
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("min_coverage"), std::string::npos) << e.what();
+  }
+  options = CueOptions();
+  options.superpixel_size = 1;
+  EXPECT_THROW(options.Check(), InputError);
+  EXPECT_THROW(SeedsFromCams(Cams(), {7}, -1, CueOptions()), InputError);
+  EXPECT_THROW(SeedsFromCams(cv::Mat(4, 4, CV_32F), {0}, -1, CueOptions()), InputError);
+}
+
+TEST(Cues, RenderingsHaveTheImageSize) {
+  const cv::Mat image = DiscImage();
+  const cv::Mat seeds = SeedsFromCams(Cams(), {2}, 0, CueOptions());
+  const cv::Mat cue = RenderCue(seeds, image);
+  ASSERT_EQ(cue.type(), CV_8UC3);
+  ASSERT_EQ(cue.size(), image.size());
+  // Different classes render differently at pixels of equal image colour.
+  cv::Mat grey(4, 4, CV_8UC1, cv::Scalar(100));
+  cv::Mat labels = (cv::Mat_<uchar>(4, 4) << 0, 1, kUnknown, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
+  const cv::Mat small = RenderCue(labels, grey);
+  EXPECT_NE(small.at<cv::Vec3b>(0, 0), small.at<cv::Vec3b>(0, 1));
+  EXPECT_NE(small.at<cv::Vec3b>(0, 0), small.at<cv::Vec3b>(0, 2));
+
+  const cv::Mat cams = Cams();
+  const cv::Mat plane(kSide, kSide, CV_32F, const_cast<uchar*>(cams.ptr(2)));
+  const cv::Mat heat = RenderCam(plane, image);
+  ASSERT_EQ(heat.type(), CV_8UC3);
+  ASSERT_EQ(heat.size(), image.size());
+  // JET: the peak is red-ish, the far corner blue-ish.
+  const cv::Vec3b peak = heat.at<cv::Vec3b>(64, 63);
+  const cv::Vec3b corner = heat.at<cv::Vec3b>(127, 0);
+  EXPECT_GT(int(peak[2]) - int(peak[0]), int(corner[2]) - int(corner[0]));
+}
+
+}  // namespace
+}  // namespace moslam::weak
