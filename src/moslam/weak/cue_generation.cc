@@ -1,5 +1,6 @@
 // GenerateCues (training.h): class activation maps of the colour and grey classifiers turned into
 // seeds, refined with superpixels and fused (Sun, Tai, Gao, Liu, Yeung 2019).
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -70,6 +71,16 @@ std::vector<int> EvalMapping(const CueGenerationOptions& options,
   return {};
 }
 
+// The classifier has no background output; SeedsFromCams takes the background as one more
+// (ignored) plane, so that background seeds carry the segmenter's background index.
+cv::Mat WithBackgroundPlane(const cv::Mat& cams, int background) {
+  if (background < 0) return cams;
+  const int sizes[] = {cams.size[0] + 1, cams.size[1], cams.size[2]};
+  cv::Mat out(3, sizes, CV_32F, cv::Scalar(0));
+  std::memcpy(out.data, cams.data, cams.total() * sizeof(float));
+  return out;
+}
+
 struct CueStats {
   double pixels = 0, seeded = 0, correct = 0, labelled_seeded = 0;
   std::map<int, double> per_class_seeded, per_class_correct;
@@ -133,7 +144,9 @@ void GenerateCues(const CueGenerationOptions& options) {
         cv::cvtColor(grey, input, cv::COLOR_GRAY2BGR);
       }
       const cv::Mat cams = internal::ComputeCams(model.net, input, nullptr);
-      const cv::Mat seeds = SeedsFromCams(cams, sample.classes, background, options.cues);
+      const cv::Mat seeds =
+          SeedsFromCams(WithBackgroundPlane(cams, background), sample.classes, background,
+                        options.cues);
       refined.push_back(RefineWithSuperpixels(seeds, input, options.cues));
       if (static_cast<int>(i) < options.preview_images) {
         for (int c : sample.classes) {
