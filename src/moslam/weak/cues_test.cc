@@ -116,6 +116,27 @@ TEST(Cues, SuperpixelsKeepSeedsInsideTheObject) {
   }
 }
 
+TEST(Cues, SuperpixelsWithConflictingOrSparseSeedsAreDropped) {
+  const cv::Mat image = DiscImage();
+  const CueOptions options;
+  // Two labels in a fine checkerboard: every superpixel straddles both.
+  cv::Mat checker(kSide, kSide, CV_8UC1);
+  // Label 1 everywhere but one pixel in eight: each superpixel agrees and is well covered.
+  cv::Mat mostly(kSide, kSide, CV_8UC1);
+  for (int y = 0; y < kSide; ++y) {
+    for (int x = 0; x < kSide; ++x) {
+      checker.at<uchar>(y, x) = (x + y) % 2;
+      mostly.at<uchar>(y, x) = (x + 3 * y) % 8 == 0 ? kUnknown : 1;
+    }
+  }
+  EXPECT_EQ(CountLabel(RefineWithSuperpixels(checker, image, options), kUnknown), kSide * kSide);
+  EXPECT_EQ(CountLabel(RefineWithSuperpixels(mostly, image, options), 1), kSide * kSide);
+  // Sparse seeds (one pixel in eight) cover too little of any superpixel.
+  cv::Mat sparse(kSide, kSide, CV_8UC1, cv::Scalar(kUnknown));
+  sparse.setTo(1, mostly == kUnknown);
+  EXPECT_EQ(CountLabel(RefineWithSuperpixels(sparse, image, options), kUnknown), kSide * kSide);
+}
+
 TEST(Cues, BackgroundSeedsOnlyWithABackgroundClass) {
   const cv::Mat cams = Cams();
   const CueOptions options;

@@ -11,8 +11,8 @@
 
 #include <vector>
 
-#include <opencv2/core.hpp>
 #include <torch/torch.h>
+#include <opencv2/core.hpp>
 
 #include "moslam/semantic/dense_crf.h"
 
