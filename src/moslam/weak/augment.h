@@ -38,7 +38,15 @@ struct Sample {
 };
 
 // Reads entry `index` of `list` (and `cue_path` when not empty), augments it with `rng`.
-// With `augment` false: the whole image resized, no flip or colour change (evaluation, cues).
+// With `augment` false: the whole image resized, no flip or colour change (evaluation, cues); the
+// grey conversion (options.grey) is the network's input type and applies either way. The random
+// draws come in a fixed order (crop, flip, colour) from rng's raw output, so a seed gives the same
+// samples on every platform. Labels of a crop: entries with a label_image are relabelled by
+// CropLabels (list.label_min_fraction); others keep the whole image's labels — an approximation
+// (a crop can cut an object away; min_scale bounds how much). Cues are resized with
+// INTER_NEAREST_EXACT (pixel-centre aligned with the image's resampling). InputError naming the
+// file for an unreadable image or a cue/label image that is not 8-bit single-channel of the
+// image's size.
 Sample LoadSample(const ImageList& list, int index, const AugmentOptions& options,
                   std::mt19937_64& rng, bool augment, const std::string& cue_path = "");
 
