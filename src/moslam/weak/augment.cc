@@ -147,7 +147,12 @@ Sample LoadSample(const ImageList& list, int index, const AugmentOptions& option
   sample.index = index;
   sample.classes = SampleClasses(list, entry, roi, image.size());
   sample.image = ResizeImage(image(roi), out_size);
-  if (!cue.empty()) cv::resize(cue(roi), sample.cue, out_size, 0, 0, cv::INTER_NEAREST);
+  if (!cue.empty()) {
+    // INTER_NEAREST_EXACT rather than INTER_NEAREST: the latter samples floor(x * scale), half a
+    // source pixel off the centres that the image's interpolation uses; the exact variant keeps
+    // cue and image aligned (both are nearest neighbour, no label is ever blended).
+    cv::resize(cue(roi), sample.cue, out_size, 0, 0, cv::INTER_NEAREST_EXACT);
+  }
   if (flip) {
     cv::flip(sample.image, sample.image, 1);
     if (!sample.cue.empty()) cv::flip(sample.cue, sample.cue, 1);

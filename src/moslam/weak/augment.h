@@ -8,18 +8,18 @@
 #include <random>
 #include <vector>
 
-#include <opencv2/core.hpp>
 #include <torch/torch.h>
+#include <opencv2/core.hpp>
 
 #include "moslam/weak/image_list.h"
 
 namespace moslam::weak {
 
 struct AugmentOptions {
-  int output_width = 320;   // pixels: every sample is resized to this
+  int output_width = 320;  // pixels: every sample is resized to this
   int output_height = 240;
-  bool flip = true;               // horizontal flip with probability 0.5
-  double min_scale = 0.7;         // crop side as a fraction of the image side (uniform in range)
+  bool flip = true;        // horizontal flip with probability 0.5
+  double min_scale = 0.7;  // crop side as a fraction of the image side (uniform in range)
   double max_scale = 1.0;
   double crop_probability = 0.5;  // otherwise the whole image
   double brightness = 0.2;        // +- fraction
@@ -31,21 +31,29 @@ struct AugmentOptions {
 };
 
 struct Sample {
-  cv::Mat image;            // CV_8UC3 BGR (grey replicated when grey), output size
-  cv::Mat cue;              // CV_8UC1 labels (255 = unknown) of output size, when a cue was given
+  cv::Mat image;             // CV_8UC3 BGR (grey replicated when grey), output size
+  cv::Mat cue;               // CV_8UC1 labels (255 = unknown) of output size, when a cue was given
   std::vector<int> classes;  // image-level labels of the (cropped) sample
-  int index = -1;           // entry index
+  int index = -1;            // entry index
 };
 
 // Reads entry `index` of `list` (and `cue_path` when not empty), augments it with `rng`.
-// With `augment` false: the whole image resized, no flip or colour change (evaluation, cues).
+// With `augment` false: the whole image resized, no flip or colour change (evaluation, cues); the
+// grey conversion (options.grey) is the network's input type and applies either way. The random
+// draws come in a fixed order (crop, flip, colour) from rng's raw output, so a seed gives the same
+// samples on every platform. Labels of a crop: entries with a label_image are relabelled by
+// CropLabels (list.label_min_fraction); others keep the whole image's labels — an approximation
+// (a crop can cut an object away; min_scale bounds how much). Cues are resized with
+// INTER_NEAREST_EXACT (pixel-centre aligned with the image's resampling). InputError naming the
+// file for an unreadable image or a cue/label image that is not 8-bit single-channel of the
+// image's size.
 Sample LoadSample(const ImageList& list, int index, const AugmentOptions& options,
                   std::mt19937_64& rng, bool augment, const std::string& cue_path = "");
 
 struct Batch {
-  torch::Tensor images;  // N x 3 x H x W float, RGB in [-1, 1]
-  torch::Tensor labels;  // N x C float multi-hot
-  torch::Tensor cues;    // N x H x W int64 (255 = unknown), undefined without cues
+  torch::Tensor images;      // N x 3 x H x W float, RGB in [-1, 1]
+  torch::Tensor labels;      // N x C float multi-hot
+  torch::Tensor cues;        // N x H x W int64 (255 = unknown), undefined without cues
   std::vector<cv::Mat> bgr;  // the samples' images (the CRF of the constrain loss needs them)
   std::vector<int> indices;
 };
