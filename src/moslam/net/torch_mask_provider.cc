@@ -79,6 +79,11 @@ void CompleteTorchCard(const NetConfig& config, semantic::ModelCard* card) {
   card->Check();
 }
 
+void CompleteTorchCard(semantic::ModelCard* card) {
+  RequireTorch(*card);
+  CompleteTorchCard(ReadNetConfig(card->model), card);
+}
+
 semantic::ModelCard TorchModelCard(const std::string& model_path) {
   semantic::ModelCard card;
   card.path = model_path;
@@ -88,15 +93,13 @@ semantic::ModelCard TorchModelCard(const std::string& model_path) {
   card.mean = {127.5, 127.5, 127.5};
   card.scale = 1.0 / 127.5;
   card.rgb = true;
-  CompleteTorchCard(ReadNetConfig(model_path), &card);
+  CompleteTorchCard(&card);
   return card;
 }
 
 semantic::ModelCard LoadAnyModelCard(const std::string& path, const std::string& shared_root) {
   semantic::ModelCard card = semantic::LoadModelCard(path, shared_root);
-  if (card.kind == semantic::ModelKind::kTorch) {
-    CompleteTorchCard(ReadNetConfig(card.model), &card);
-  }
+  if (card.kind == semantic::ModelKind::kTorch) CompleteTorchCard(&card);
   return card;
 }
 

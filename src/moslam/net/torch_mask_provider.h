@@ -28,6 +28,8 @@ class TorchSegmenter;
 // except `movable`, which replaces the model's movable classes (each must be a class). InputError
 // naming the card and key otherwise, or when the model is not a segmenter.
 void CompleteTorchCard(const NetConfig& config, semantic::ModelCard* card);
+// The same with the config read from card->model (InputError when it is not a model file).
+void CompleteTorchCard(semantic::ModelCard* card);
 
 // A completed torch card for a bare model file (name: the file's stem, default refinement).
 semantic::ModelCard TorchModelCard(const std::string& model_path);
