@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "moslam/util/error.h"
+#include "moslam/util/strings.h"
 
 namespace moslam::weak {
 namespace {
@@ -201,6 +202,27 @@ nlohmann::json SegEvaluator::ToJson() const {
           {"ignored_pixels", ignored_pixels_},
           {"confusion", confusion},
           {"unmatched_label_pixels", unmatched}};
+}
+
+const std::vector<std::string>& CamVidLabelNames() {
+  static const std::vector<std::string> names = {"Sky",      "Building",   "Pole",       "Road",
+                                                 "Pavement", "Tree",       "SignSymbol", "Fence",
+                                                 "Car",      "Pedestrian", "Bicyclist"};
+  return names;
+}
+
+std::vector<int> LabelToClassByName(const std::vector<std::string>& label_names,
+                                    const std::vector<std::string>& classes, int background) {
+  std::vector<int> mapping(label_names.size(), background);
+  bool matched = false;
+  for (size_t id = 0; id < label_names.size(); ++id) {
+    for (size_t c = 0; c < classes.size(); ++c) {
+      if (ToLower(classes[c]) != ToLower(label_names[id])) continue;
+      mapping[id] = static_cast<int>(c);
+      matched = true;
+    }
+  }
+  return matched ? mapping : std::vector<int>();
 }
 
 cv::Mat RenderConfusion(const cv::Mat& confusion, const std::vector<std::string>& class_names) {

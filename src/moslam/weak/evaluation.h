@@ -65,6 +65,15 @@ class SegEvaluator {
   int images_ = 0;
 };
 
+// CamVid's 11 class names in label-id order (SegNet's split; id 11 is "unlabelled").
+const std::vector<std::string>& CamVidLabelNames();
+
+// SegEvalOptions::label_to_class by name: label id i (named label_names[i]) maps to the class of
+// the same name, compared case-insensitively; a label whose name is not a class maps to
+// `background` (-1: no counterpart). Empty (the identity mapping) when no name matches at all.
+std::vector<int> LabelToClassByName(const std::vector<std::string>& label_names,
+                                    const std::vector<std::string>& classes, int background);
+
 // The confusion matrix as an image (rows normalized, class names on both axes).
 cv::Mat RenderConfusion(const cv::Mat& confusion, const std::vector<std::string>& class_names);
 

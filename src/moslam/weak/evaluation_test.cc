@@ -135,6 +135,22 @@ TEST(SegEvaluator, BadInputIsAnInputError) {
   EXPECT_THROW(SegEvaluator({"a", "b"}, flags), InputError);
 }
 
+TEST(LabelToClassByName, MatchesNamesAndSendsTheRestToTheBackground) {
+  const std::vector<std::string>& camvid = CamVidLabelNames();
+  ASSERT_EQ(camvid.size(), 11u);
+  // The CamVid classes themselves: the identity, written out.
+  const std::vector<int> same = LabelToClassByName(camvid, camvid, -1);
+  for (int id = 0; id < 11; ++id) EXPECT_EQ(same[id], id);
+  // A synthetic-style model: background, car, pedestrian (case-insensitive).
+  const std::vector<int> few = LabelToClassByName(camvid, {"background", "car", "PEDESTRIAN"}, 0);
+  EXPECT_EQ(few[8], 1);   // Car
+  EXPECT_EQ(few[9], 2);   // Pedestrian
+  EXPECT_EQ(few[0], 0);   // Sky -> background
+  EXPECT_EQ(few[10], 0);  // Bicyclist -> background
+  EXPECT_EQ(LabelToClassByName(camvid, {"car", "person"}, -1)[10], -1);
+  EXPECT_TRUE(LabelToClassByName(camvid, {"a", "b"}, 0).empty());  // nothing in common
+}
+
 TEST(RenderConfusion, CellsAreShadedByRowShareAndEmptyRowsGrey) {
   cv::Mat confusion = cv::Mat::zeros(3, 3, CV_64F);
   confusion.at<double>(0, 0) = 10;  // row 0: all correct
