@@ -27,6 +27,8 @@ struct SegEvalOptions {
 // the movable flag of the label's class; movable prediction: movable_classes (none when empty).
 class SegEvaluator {
  public:
+  // InputError for 0 or more than 255 classes, a mapping to no class, movable_classes of another
+  // length than the classes, or label ids beyond 8 bits.
   SegEvaluator(std::vector<std::string> class_names, SegEvalOptions options);
 
   // prediction: H x W CV_8U class indices; labels: H x W CV_8U ground-truth ids (same size).
