@@ -13,6 +13,7 @@ void AddCrfCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddSynthCommand(CLI::App& app);
 void AddSegmentCommand(CLI::App& app);
+void AddSegEvalCommand(CLI::App& app);
 void AddVocabCommand(CLI::App& app);
 void AddTrainCommand(CLI::App& app);
 

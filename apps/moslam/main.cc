@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   moslam::app::AddRunCommand(app);
   moslam::app::AddSynthCommand(app);
   moslam::app::AddSegmentCommand(app);
+  moslam::app::AddSegEvalCommand(app);
   moslam::app::AddVocabCommand(app);
   moslam::app::AddTrainCommand(app);
 

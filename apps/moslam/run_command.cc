@@ -28,7 +28,8 @@ namespace {
 struct RunArgs {
   std::vector<std::string> dataset;  // FORMAT PATH
   std::string settings;
-  std::vector<std::string> mask_source = {"none"};  // none | files DIR | synth-gt | onnx | detector
+  // none | files DIR | synth-gt | onnx | detector | model
+  std::vector<std::string> mask_source = {"none"};
   std::string model_card;
   std::string crf;  // empty: the card's setting
   std::string mask_missing = "error";
@@ -107,8 +108,9 @@ runner::MaskOptions MakeMaskOptions(const RunArgs& args) {
   runner::MaskOptions options;
   const auto kind = runner::ParseMaskSourceKind(args.mask_source.at(0));
   if (!kind) {
-    ThrowInput("--mask-source: unknown source '{}' (none, files DIR, synth-gt, onnx, detector)",
-               args.mask_source[0]);
+    ThrowInput(
+        "--mask-source: unknown source '{}' (none, files DIR, synth-gt, onnx, detector, model)",
+        args.mask_source[0]);
   }
   options.kind = *kind;
   const bool takes_folder = *kind == runner::MaskSourceKind::kFiles;
@@ -206,17 +208,20 @@ void AddRunCommand(CLI::App& app) {
       ->add_option("--mask-source", args->mask_source,
                    "Movable-object masks: none, files DIR (DIR/<image stem>.png), synth-gt (the "
                    "synthetic generator's class/<stem>.png with classes.txt), onnx (a "
-                   "segmentation network) or detector (box masks), the last two with --model-card; "
-                   "computed in a thread of their own, one frame ahead of tracking")
+                   "segmentation network), detector (box masks), both with --model-card, or model "
+                   "(a libtorch network of the weakly supervised pipeline, a torch card; "
+                   "default card configs/models/weak_camvid.yaml); computed in a thread of their "
+                   "own, one frame ahead of tracking")
       ->expected(1, 2)
       ->default_str("none");
   command->add_option("--model-card", args->model_card,
-                      "onnx, detector: the model card (configs/models/*.yaml); model files are "
-                      "found beside it or under MOSLAM_SHARED");
+                      "onnx, detector, model: the model card (configs/models/*.yaml); model files "
+                      "are found beside it or under MOSLAM_SHARED");
   command
-      ->add_option("--crf", args->crf,
-                   "onnx, detector: refine with the CRF's colour (c), depth (d) or both (cd) "
-                   "kernels, or none (default: the card's setting, normally none)")
+      ->add_option(
+          "--crf", args->crf,
+          "onnx, detector, model: refine with the CRF's colour (c), depth (d) or both (cd) "
+          "kernels, or none (default: the card's setting, normally none)")
       ->check(CLI::IsMember({"none", "c", "d", "cd"}));
   command
       ->add_option("--mask-missing", args->mask_missing,
@@ -224,9 +229,10 @@ void AddRunCommand(CLI::App& app) {
       ->check(CLI::IsMember({"error", "empty"}))
       ->capture_default_str();
   command
-      ->add_option("--movable", args->movable,
-                   "synth-gt, onnx, detector: movable class names, comma-separated (default: "
-                   "those classes.txt or the model card marks movable)")
+      ->add_option(
+          "--movable", args->movable,
+          "synth-gt, onnx, detector, model: movable class names, comma-separated (default: "
+          "those classes.txt or the model card marks movable)")
       ->delimiter(',');
   command->add_option("--mask-dilate", args->mask_dilate, "Grow every mask by this many pixels")
       ->capture_default_str();

@@ -1,7 +1,7 @@
-// moslam segment: runs a mask provider (an ONNX segmentation network or a detector, described by
-// a model card) over a sequence or a folder of images, writes each frame's movable-object mask
-// and overlays, times every frame, and, given label images, scores the masks (binary movable IoU,
-// per-class recall) into segment.json.
+// moslam segment: runs a mask provider (an ONNX segmentation network, a detector or a libtorch
+// network of the weakly supervised pipeline, described by a model card) over a sequence or a folder
+// of images, writes each frame's movable-object mask and overlays, times every frame, and, given
+// label images, scores the masks (binary movable IoU, per-class recall) into segment.json.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -21,6 +21,7 @@
 #include "moslam/eval/statistics.h"
 #include "moslam/io/dataset.h"
 #include "moslam/io/image.h"
+#include "moslam/net/torch_mask_provider.h"
 #include "moslam/runner/outputs.h"
 #include "moslam/runner/run_loop.h"
 #include "moslam/semantic/mask_provider.h"
@@ -158,13 +159,14 @@ void Run(const SegmentArgs& args) {
   if (args.images.empty() == args.dataset.empty()) {
     ThrowInput("give either --images DIR or --dataset FORMAT PATH");
   }
-  semantic::ModelCard card = semantic::LoadModelCard(args.model_card);
+  // A torch card is completed from its model file here, so that --movable can name its classes.
+  semantic::ModelCard card = net::LoadAnyModelCard(args.model_card);
   if (!args.movable.empty()) semantic::SetMovable(args.movable, &card);
   semantic::RefineOptions refine = card.refine;
   if (!args.crf.empty()) refine.crf = semantic::ParseCrfMode(args.crf).value();
   if (args.dilate >= 0) refine.dilate_px = args.dilate;
   if (args.working_side >= 0) refine.working_side = args.working_side;
-  const std::unique_ptr<semantic::MaskProvider> provider = semantic::MakeMaskProvider(card, refine);
+  const std::unique_ptr<semantic::MaskProvider> provider = net::MakeAnyMaskProvider(card, refine);
   io::SensorType sensor = io::SensorType::kMonocular;
   const std::vector<io::FrameEntry> frames = Frames(args, &sensor);
   spdlog::info("{} frames, {}", frames.size(), provider->Describe());
@@ -229,12 +231,13 @@ void AddSegmentCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "segment",
       "Movable-object masks of a sequence or an image folder from a model card (ONNX "
-      "segmentation or detector): masks/<stem>.png (255 = movable), overlays/<stem>.png, "
+      "segmentation, detector or torch): masks/<stem>.png (255 = movable), overlays/<stem>.png, "
       "segment.json with per-frame times and, with --labels, the movable IoU");
   cmd->add_option("--dataset", args->dataset, "FORMAT PATH: tum, kitti, euroc or folder")
       ->expected(2);
   cmd->add_option("--images", args->images, "A folder of .png/.jpg images (name order)");
-  cmd->add_option("--model-card", args->model_card, "Model card (configs/models/*.yaml)")
+  cmd->add_option("--model-card", args->model_card,
+                  "Model card (configs/models/*.yaml; type segmentation, detector or torch)")
       ->required();
   cmd->add_option("--crf", args->crf, "CRF kernels: none, c, d, cd (default: the card's)")
       ->check(CLI::IsMember({"none", "c", "d", "cd"}));

@@ -116,10 +116,11 @@ std::vector<std::pair<std::string, std::string>> TorchvisionNames(int index) {
   return {{"conv.0.0", "conv.0.1"}, {"conv.1.0", "conv.1.1"}, {"conv.2", "conv.3"}};
 }
 
-// He et al. 2015 initialization; the ImageNet weights normally replace it.
+// He et al. 2015 initialization by fan-in (a depthwise conv's fan-in is its 3x3 window), which
+// keeps activations at unit scale without BatchNorm; the ImageNet weights normally replace it.
 void InitializeConv(torch::nn::Conv2d& conv) {
   torch::NoGradGuard no_grad;
-  torch::nn::init::kaiming_normal_(conv->weight, 0.0, torch::kFanOut, torch::kReLU);
+  torch::nn::init::kaiming_normal_(conv->weight, 0.0, torch::kFanIn, torch::kReLU);
   conv->bias.zero_();
 }
 
@@ -178,9 +179,9 @@ MobileNetV2Impl::MobileNetV2Impl(const BackboneOptions& options) : options_(opti
   int stride = 1, dilation = 1;
   for (int i = 0; i <= options_.last_block; ++i) {
     const BlockSpec& spec = Specs()[i];
-    int block_stride = spec.stride, block_dilation = 1;
+    const int block_dilation = dilation;
+    int block_stride = spec.stride;
     if (stride * spec.stride > options_.output_stride) {
-      block_dilation = dilation;
       dilation *= spec.stride;
       block_stride = 1;
     } else {

@@ -30,6 +30,8 @@ const char* ToString(MaskSourceKind kind) {
       return "onnx";
     case MaskSourceKind::kDetector:
       return "detector";
+    case MaskSourceKind::kModel:
+      return "model";
   }
   return "?";
 }
@@ -41,26 +43,32 @@ std::optional<MaskSourceKind> ParseMaskSourceKind(const std::string& name) {
   if (lower == "synth-gt") return MaskSourceKind::kSynthGt;
   if (lower == "onnx") return MaskSourceKind::kOnnx;
   if (lower == "detector") return MaskSourceKind::kDetector;
+  if (lower == "model") return MaskSourceKind::kModel;
   return std::nullopt;
+}
+
+bool IsModelSource(MaskSourceKind kind) {
+  return kind == MaskSourceKind::kOnnx || kind == MaskSourceKind::kDetector ||
+         kind == MaskSourceKind::kModel;
 }
 
 void MaskOptions::Check() const {
   if (kind == MaskSourceKind::kFiles && folder.empty()) {
     ThrowInput("--mask-source files: give the folder of mask PNGs (--mask-source files DIR)");
   }
-  const bool model = kind == MaskSourceKind::kOnnx || kind == MaskSourceKind::kDetector;
+  const bool model = IsModelSource(kind);
   if (kind != MaskSourceKind::kSynthGt && !model && !movable.empty()) {
-    ThrowInput("--movable: applies to --mask-source synth-gt, onnx and detector only");
+    ThrowInput("--movable: applies to --mask-source synth-gt, onnx, detector and model only");
   }
-  if (model && model_card.empty()) {
+  if (model && kind != MaskSourceKind::kModel && model_card.empty()) {
     ThrowInput("--mask-source {}: give the model card (--model-card configs/models/<name>.yaml)",
                ToString(kind));
   }
   if (!model && !model_card.empty()) {
-    ThrowInput("--model-card: applies to --mask-source onnx and detector only");
+    ThrowInput("--model-card: applies to --mask-source onnx, detector and model only");
   }
   if (!model && crf && *crf != semantic::CrfMode::kNone) {
-    ThrowInput("--crf: applies to --mask-source onnx and detector only");
+    ThrowInput("--crf: applies to --mask-source onnx, detector and model only");
   }
   if (dilate_px < 0) ThrowInput("--mask-dilate: must be >= 0 pixels, got {}", dilate_px);
 }
@@ -234,6 +242,7 @@ std::unique_ptr<MaskSource> MakeMaskSource(const MaskOptions& options,
       return std::make_unique<SynthGroundTruth>(options, sequence);
     case MaskSourceKind::kOnnx:
     case MaskSourceKind::kDetector:
+    case MaskSourceKind::kModel:
       return MakeModelMaskSource(options);
     case MaskSourceKind::kNone:
       break;

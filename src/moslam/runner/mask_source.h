@@ -4,7 +4,10 @@
 //   none      no mask.
 //   onnx      an ONNX semantic-segmentation network, described by a model card
 //   detector  an object detector's boxes (Darknet or ONNX), described by a model card
-//             (both: semantic/mask_provider.h, refined per RefineOptions, --crf none|c|d|cd)
+//   model     a segmentation network of the weakly supervised pipeline run by libtorch, described
+//             by a model card of type torch (net/torch_mask_provider.h); the card defaults to
+//             kDefaultTorchCard when that file exists
+//             (all three: semantic/mask_provider.h, refined per RefineOptions, --crf none|c|d|cd)
 //   files     a folder of mask PNGs named like the frames' images: frame image .../rgb/<stem>.png
 //             (or any extension) takes DIR/<stem>.png. A missing file is an InputError naming
 //             it, unless `missing_empty` (then the frame has no mask).
@@ -30,20 +33,29 @@
 
 namespace moslam::runner {
 
-enum class MaskSourceKind { kNone, kFiles, kSynthGt, kOnnx, kDetector };
+enum class MaskSourceKind { kNone, kFiles, kSynthGt, kOnnx, kDetector, kModel };
 
-const char* ToString(MaskSourceKind kind);  // "none", "files", "synth-gt", "onnx", "detector"
+// "none", "files", "synth-gt", "onnx", "detector", "model"
+const char* ToString(MaskSourceKind kind);
 std::optional<MaskSourceKind> ParseMaskSourceKind(const std::string& name);
+// onnx, detector and model: the sources that run a network described by a model card.
+bool IsModelSource(MaskSourceKind kind);
+
+// The card `--mask-source model` uses without --model-card (relative to the working directory).
+inline constexpr const char* kDefaultTorchCard = "configs/models/weak_camvid.yaml";
 
 struct MaskOptions {
   MaskSourceKind kind = MaskSourceKind::kNone;
   std::string folder;          // files: the folder of mask PNGs (required there)
   bool missing_empty = false;  // files: a missing mask file means "no mask" instead of an error
-  // synth-gt, onnx, detector: class names that are movable; empty = the ones classes.txt (or the
-  // model card) marks movable.
+  // synth-gt, onnx, detector, model: class names that are movable; empty = the ones classes.txt
+  // (or the model card) marks movable.
   std::vector<std::string> movable;
-  std::string model_card;  // onnx, detector: the card's path (required there)
-  // onnx, detector: CRF kernels; nullopt = the card's refine settings (no CRF unless set there).
+  // onnx, detector, model: the card's path (required for onnx and detector; model defaults to
+  // kDefaultTorchCard).
+  std::string model_card;
+  // onnx, detector, model: CRF kernels; nullopt = the card's refine settings (no CRF unless set
+  // there).
   std::optional<semantic::CrfMode> crf;
   int dilate_px = 0;  // grow every mask by this many pixels (elliptic element), >= 0
   // InputError naming the command-line option of the first bad value.
@@ -87,7 +99,7 @@ class MaskSource {
 };
 
 // Checks `options` and, for synth-gt, reads classes.txt (InputError when absent, or when a name
-// in `movable` is not one of its classes); for onnx and detector, loads the model card and the
+// in `movable` is not one of its classes); for onnx, detector and model, loads the card and the
 // network (InputError naming the card or the model file).
 std::unique_ptr<MaskSource> MakeMaskSource(const MaskOptions& options,
                                            const io::Sequence& sequence);

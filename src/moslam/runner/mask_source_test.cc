@@ -214,6 +214,25 @@ TEST(MaskSourceTest, NetworkSourcesCheckTheirOptionsAndTheCardsKind) {
   EXPECT_EQ(ParseMaskSourceKind("onnx"), MaskSourceKind::kOnnx);
   EXPECT_EQ(ParseMaskSourceKind("detector"), MaskSourceKind::kDetector);
   EXPECT_STREQ(ToString(MaskSourceKind::kDetector), "detector");
+  EXPECT_EQ(ParseMaskSourceKind("model"), MaskSourceKind::kModel);
+  EXPECT_STREQ(ToString(MaskSourceKind::kModel), "model");
+
+  // A torch card is only for --mask-source model, and model only takes torch cards; the kinds
+  // are checked before any model file is read.
+  testing::TempDir dir;
+  dir.Write("net.mnet", "not read");
+  options = MaskOptions();
+  options.kind = MaskSourceKind::kOnnx;
+  options.model_card = dir.Write("torch.yaml", "%YAML:1.0\ntype: torch\nmodel: net.mnet\n");
+  EXPECT_THAT(ErrorOf([&] { MakeMaskSource(options, none); }),
+              ::testing::AllOf(HasSubstr("torch.yaml"), HasSubstr("--mask-source model")));
+  options.kind = MaskSourceKind::kModel;
+  options.model_card = dir.Write("onnx.yaml",
+                                 "%YAML:1.0\ntype: segmentation\nmodel: net.mnet\n"
+                                 "input_width: 8\ninput_height: 8\nclasses: [a, b]\n"
+                                 "movable: [b]\n");
+  EXPECT_THAT(ErrorOf([&] { MakeMaskSource(options, none); }),
+              ::testing::AllOf(HasSubstr("onnx.yaml"), HasSubstr("torch card")));
 
   MOSLAM_SHARED_OR_SKIP(model, "models/deeplabv3_mnv2_voc/deeplabv3_mnv2_voc.onnx");
   options = MaskOptions();

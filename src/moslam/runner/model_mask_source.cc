@@ -1,7 +1,10 @@
 #include "moslam/runner/model_mask_source.h"
 
+#include <filesystem>
+
 #include <fmt/format.h>
 
+#include "moslam/net/torch_mask_provider.h"
 #include "moslam/semantic/model_card.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
@@ -35,6 +38,17 @@ class ProviderMaskSource : public MaskSource {
   std::unique_ptr<semantic::MaskProvider> provider_;
 };
 
+semantic::ModelKind WantedKind(MaskSourceKind kind) {
+  switch (kind) {
+    case MaskSourceKind::kDetector:
+      return semantic::ModelKind::kDetector;
+    case MaskSourceKind::kModel:
+      return semantic::ModelKind::kTorch;
+    default:
+      return semantic::ModelKind::kSegmentation;
+  }
+}
+
 }  // namespace
 
 std::unique_ptr<MaskSource> MakeProviderMaskSource(
@@ -43,20 +57,34 @@ std::unique_ptr<MaskSource> MakeProviderMaskSource(
 }
 
 std::unique_ptr<MaskSource> MakeModelMaskSource(const MaskOptions& options) {
-  semantic::ModelCard card = semantic::LoadModelCard(options.model_card);
-  const semantic::ModelKind wanted = options.kind == MaskSourceKind::kDetector
-                                         ? semantic::ModelKind::kDetector
-                                         : semantic::ModelKind::kSegmentation;
-  if (card.kind != wanted) {
-    ThrowInFile(card.path, fmt::format("type: is {}, but --mask-source {} needs a {} card",
-                                       semantic::ToString(card.kind), ToString(options.kind),
-                                       semantic::ToString(wanted)));
+  std::string card_path = options.model_card;
+  if (card_path.empty() && options.kind == MaskSourceKind::kModel) {
+    std::error_code ec;
+    if (!std::filesystem::exists(kDefaultTorchCard, ec)) {
+      ThrowInput(
+          "--mask-source model: give the torch model card (--model-card), {} does not "
+          "exist here",
+          kDefaultTorchCard);
+    }
+    card_path = kDefaultTorchCard;
   }
+  semantic::ModelCard card = semantic::LoadModelCard(card_path);
+  const semantic::ModelKind wanted = WantedKind(options.kind);
+  if (card.kind != wanted) {
+    ThrowInFile(
+        card.path,
+        fmt::format(
+            "type: is {}, but --mask-source {} needs a {} card{}", semantic::ToString(card.kind),
+            ToString(options.kind), semantic::ToString(wanted),
+            card.kind == semantic::ModelKind::kTorch ? " (torch cards: --mask-source model)" : ""));
+  }
+  // A torch card is completed from its model file first, so that --movable can name its classes.
+  if (card.kind == semantic::ModelKind::kTorch) net::CompleteTorchCard(&card);
   if (!options.movable.empty()) semantic::SetMovable(options.movable, &card);
   semantic::RefineOptions refine = card.refine;
   if (options.crf) refine.crf = *options.crf;
   if (options.dilate_px > 0) refine.dilate_px = options.dilate_px;
-  return MakeProviderMaskSource(semantic::MakeMaskProvider(card, refine));
+  return MakeProviderMaskSource(net::MakeAnyMaskProvider(card, refine));
 }
 
 }  // namespace moslam::runner

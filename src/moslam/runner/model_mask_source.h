@@ -1,5 +1,6 @@
-// The network mask sources of `moslam run` (--mask-source onnx | detector): a
-// semantic::MaskProvider, built from a model card, behind runner::MaskSource.
+// The network mask sources of `moslam run` (--mask-source onnx | detector | model): a
+// semantic::MaskProvider, built from a model card (net::MakeAnyMaskProvider), behind
+// runner::MaskSource.
 #pragma once
 
 #include <memory>
@@ -12,7 +13,8 @@ namespace moslam::runner {
 // Loads options.model_card (its refine settings, with options.crf, options.dilate_px and
 // options.movable overriding the card's when given) and the network. InputError when the card's
 // type does not match the kind (an onnx source needs a segmentation card, a detector a detector
-// card), or naming the card or model file.
+// card, model a torch card; model without a card takes kDefaultTorchCard), or naming the card or
+// model file.
 std::unique_ptr<MaskSource> MakeModelMaskSource(const MaskOptions& options);
 
 // The same over a provider built elsewhere (tests use fakes).

@@ -23,6 +23,10 @@ cv::Mat ToBgr(const cv::Mat& image) {
 }
 
 std::unique_ptr<MaskProvider> MakeMaskProvider(const ModelCard& card, const RefineOptions& refine) {
+  if (card.kind == ModelKind::kTorch) {
+    // libtorch lives in net/, which depends on this module: net::MakeAnyMaskProvider builds these.
+    ThrowInFile(card.path, "type: torch cards are run by net::MakeAnyMaskProvider (libtorch)");
+  }
   if (card.kind == ModelKind::kDetector) return std::make_unique<BoxDetector>(card, refine);
   return std::make_unique<OnnxSegmenter>(card, refine);
 }

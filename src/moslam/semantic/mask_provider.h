@@ -58,6 +58,8 @@ class MaskProvider {
 
 // The provider a card describes (ONNX segmentation or detector), with `refine` as its
 // post-processing (usually card.refine with the command line's --crf and --mask-dilate).
+// InputError for a torch card: those need libtorch, net::MakeAnyMaskProvider
+// (net/torch_mask_provider.h) dispatches every kind.
 std::unique_ptr<MaskProvider> MakeMaskProvider(const ModelCard& card, const RefineOptions& refine);
 
 // The image as 8-bit BGR (grey replicated, alpha dropped); InputError for other types.

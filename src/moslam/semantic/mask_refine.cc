@@ -175,7 +175,7 @@ DenseCrf& MaskRefiner::ScaledCrf(double scale) {
 MaskRefiner::~MaskRefiner() = default;
 
 RefineResult MaskRefiner::Refine(cv::Mat probabilities, const cv::Mat& image,
-                                 const cv::Mat& depth_m) {
+                                 const cv::Mat& depth_m, const std::vector<float>& image_scores) {
   const int labels = static_cast<int>(movable_.size());
   if (probabilities.dims != 3 || probabilities.type() != CV_32F ||
       probabilities.size[0] != labels) {
@@ -188,8 +188,11 @@ RefineResult MaskRefiner::Refine(cv::Mat probabilities, const cv::Mat& image,
     ThrowInput("mask refinement: scores are {}x{}, the working size is {}x{}",
                probabilities.size[2], probabilities.size[1], working.width, working.height);
   }
+  if (!image_scores.empty() && static_cast<int>(image_scores.size()) != labels) {
+    ThrowInput("mask refinement: {} image scores for {} classes", image_scores.size(), labels);
+  }
   RefineResult result;
-  result.image_scores = PlaneMaxima(probabilities);
+  result.image_scores = image_scores.empty() ? PlaneMaxima(probabilities) : image_scores;
   if (options_.suppress_below > 0.0f) {
     for (int l = 0; l < labels; ++l) {
       if (l == background_ || result.image_scores[l] >= options_.suppress_below) continue;

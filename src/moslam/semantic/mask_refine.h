@@ -79,7 +79,8 @@ struct RefineResult {
                           // when the CRF ran on every class)
   cv::Mat labels;         // h x w CV_8U argmax of `probabilities`
   cv::Mat mask;           // image size CV_8UC1, 255 = movable
-  std::vector<float> image_scores;  // per class: its maximum probability over the image
+  std::vector<float> image_scores;  // per class: its maximum probability over the image, or the
+                                    // scores given to Refine
   std::vector<int> suppressed;      // classes suppressed in this frame
   double crf_ms = 0.0;              // time spent in the CRF (with its resizing)
 };
@@ -98,7 +99,10 @@ class MaskRefiner {
   // probabilities: {L, h, w} CV_32F, summing to 1 per pixel, at the working size (WorkingSize of
   // the image). image: 8UC1/8UC3/8UC4 of the frame; depth_m: CV_32F metres of the frame's size,
   // required by the depth kernel. InputError when the sizes or the class count disagree.
-  RefineResult Refine(cv::Mat probabilities, const cv::Mat& image, const cv::Mat& depth_m);
+  // image_scores: per class, what test-time suppression compares with suppress_below (e.g. a
+  // network's image-level class scores); empty = each class's maximum probability.
+  RefineResult Refine(cv::Mat probabilities, const cv::Mat& image, const cv::Mat& depth_m,
+                      const std::vector<float>& image_scores = {});
 
  private:
   // The 0/255 movable mask at the working size; with the CRF on every class, *probabilities

@@ -89,6 +89,23 @@ TEST(MaskRefine, WeakClassesAreSuppressedButNotTheBackground) {
   }
 }
 
+TEST(MaskRefine, GivenImageScoresDecideTheSuppression) {
+  const cv::Mat image(30, 40, CV_8UC1, cv::Scalar(100));
+  RefineOptions options;
+  options.suppress_below = 0.5f;
+  MaskRefiner refiner(options, {false, true, false}, 0);
+  const cv::Mat probs = Probabilities(cv::Size(40, 30), 10, 0.0f);  // person at 0.8 on the left
+  // A network's image-level score says there is no person (0.1), whatever the pixels say.
+  const RefineResult r = refiner.Refine(probs.clone(), image, {}, {0.0f, 0.1f, 0.9f});
+  EXPECT_EQ(r.suppressed, (std::vector<int>{1}));
+  EXPECT_EQ(cv::countNonZero(r.mask), 0);
+  EXPECT_FLOAT_EQ(r.image_scores[1], 0.1f);
+  const RefineResult kept = refiner.Refine(probs.clone(), image, {}, {0.0f, 0.6f, 0.0f});
+  EXPECT_EQ(kept.suppressed, (std::vector<int>{2}));
+  EXPECT_GT(cv::countNonZero(kept.mask), 0);
+  EXPECT_THROW(refiner.Refine(probs.clone(), image, {}, {0.5f}), InputError);
+}
+
 TEST(MaskRefine, ColourCrfSnapsAnUncertainMaskToTheObject) {
   // A bright square on a dark image; the network's person score is a blurry blob that spills
   // around the square. The colour kernel pulls the mask to the square's edges.

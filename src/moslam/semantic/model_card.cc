@@ -46,7 +46,15 @@ void CheckClassNames(const ModelCard& card) {
 }  // namespace
 
 const char* ToString(ModelKind kind) {
-  return kind == ModelKind::kSegmentation ? "segmentation" : "detector";
+  switch (kind) {
+    case ModelKind::kSegmentation:
+      return "segmentation";
+    case ModelKind::kDetector:
+      return "detector";
+    case ModelKind::kTorch:
+      return "torch";
+  }
+  return "?";
 }
 
 std::string SharedRoot() {
@@ -55,20 +63,25 @@ std::string SharedRoot() {
 }
 
 void ModelCard::Check() const {
-  if (input_width <= 0 || input_height <= 0) {
+  // A torch card's model file says what the card leaves out (net::CompleteTorchCard).
+  const bool torch = kind == ModelKind::kTorch;
+  const bool size_from_model = torch && input_width == 0 && input_height == 0;
+  if (!size_from_model && (input_width <= 0 || input_height <= 0)) {
     ThrowInFile(path, fmt::format("input_width, input_height: must be > 0, got {}x{}", input_width,
                                   input_height));
   }
   if (mean.size() != 3) ThrowInFile(path, "mean: give 3 numbers, one per channel");
   if (!(scale > 0.0)) ThrowInFile(path, fmt::format("scale: must be > 0, got {}", scale));
-  if (kind == ModelKind::kSegmentation && (classes.size() < 2 || classes.size() > 255)) {
+  const bool classes_from_model = torch && classes.empty();
+  if (kind != ModelKind::kDetector && !classes_from_model &&
+      (classes.size() < 2 || classes.size() > 255)) {
     ThrowInFile(path, fmt::format("classes: a segmentation model needs 2 to 255 classes, got {}",
                                   classes.size()));
   }
-  if (classes.empty()) ThrowInFile(path, "classes: no class listed");
+  if (classes.empty() && !classes_from_model) ThrowInFile(path, "classes: no class listed");
   CheckClassNames(*this);
-  if (movable.empty()) ThrowInFile(path, "movable: no movable class listed");
-  for (const std::string& name : movable) {
+  if (movable.empty() && !torch) ThrowInFile(path, "movable: no movable class listed");
+  for (const std::string& name : classes_from_model ? std::vector<std::string>() : movable) {
     if (std::find(classes.begin(), classes.end(), name) == classes.end()) {
       ThrowInFile(path, fmt::format("movable: '{}' is not one of the classes", name));
     }
@@ -114,21 +127,34 @@ ModelCard LoadModelCard(const std::string& path, const std::string& shared_root)
     card.kind = ModelKind::kSegmentation;
   } else if (type == "detector") {
     card.kind = ModelKind::kDetector;
+  } else if (type == "torch") {
+    card.kind = ModelKind::kTorch;
   } else {
-    ThrowInFile(path, fmt::format("type: '{}' is neither segmentation nor detector", type));
+    ThrowInFile(path, fmt::format("type: '{}' is none of segmentation, detector and torch", type));
   }
   card.model = ResolvePath(file.Required<std::string>("model"), "model", card, shared_root);
   std::string config;
   if (file.Read("config", &config) && !config.empty()) {
     card.config = ResolvePath(config, "config", card, shared_root);
   }
-  card.input_width = file.Required<int>("input_width");
-  card.input_height = file.Required<int>("input_height");
+  if (card.kind == ModelKind::kTorch) {
+    // Optional: the model file holds them (net::CompleteTorchCard checks the given ones). The
+    // networks take RGB in [-1, 1] (net/networks.h), so that is what an absent mean/scale means.
+    card.mean = {127.5, 127.5, 127.5};
+    card.scale = 1.0 / 127.5;
+    file.Read("input_width", &card.input_width);
+    file.Read("input_height", &card.input_height);
+    file.Read("classes", &card.classes);
+    file.Read("movable", &card.movable);
+  } else {
+    card.input_width = file.Required<int>("input_width");
+    card.input_height = file.Required<int>("input_height");
+    card.classes = file.Required<std::vector<std::string>>("classes");
+    card.movable = file.Required<std::vector<std::string>>("movable");
+  }
   file.Read("mean", &card.mean);
   file.Read("scale", &card.scale);
   file.Read("rgb", &card.rgb);
-  card.classes = file.Required<std::vector<std::string>>("classes");
-  card.movable = file.Required<std::vector<std::string>>("movable");
   file.Read("background", &card.background);
   file.Read("confidence", &card.confidence);
   file.Read("nms", &card.nms);

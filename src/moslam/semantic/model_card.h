@@ -21,6 +21,14 @@
 //   box_probability: 0.9        # detector: probability given to a box's class inside the box
 //   refine: {working_side: 320, suppress_below: 0.0, crf_binary: true, dilate_px: 0}
 //   crf: {...}                  # DenseCrfOptions fields (dense_crf.h)
+//
+// `type: torch` is a segmentation network of the weakly supervised pipeline run by libtorch
+// (net/torch_mask_provider.h): `model` is its .mnet model file, which holds its own input size,
+// normalization and classes (net/networks.h NetConfig). The keys input_width, input_height, mean,
+// scale, rgb, classes, movable and background are then optional: absent ones are taken from the
+// model file, given ones must agree with it (classes in the same order), except `movable`, which
+// may choose other movable classes among the model's. Such a card is completed when the provider
+// loads the model (net::CompleteTorchCard); until then `classes` may be empty.
 #pragma once
 
 #include <string>
@@ -30,8 +38,8 @@
 
 namespace moslam::semantic {
 
-enum class ModelKind { kSegmentation, kDetector };
-const char* ToString(ModelKind kind);  // "segmentation", "detector"
+enum class ModelKind { kSegmentation, kDetector, kTorch };
+const char* ToString(ModelKind kind);  // "segmentation", "detector", "torch"
 
 struct ModelCard {
   std::string path;  // the card file
@@ -53,7 +61,7 @@ struct ModelCard {
   RefineOptions refine;
 
   // InputError naming the card and the key of the first bad value (e.g. a movable class that is
-  // not among the classes).
+  // not among the classes). A torch card may leave the input size (0), classes and movable empty.
   void Check() const;
   // One flag per class: is it in `movable`.
   std::vector<bool> MovableFlags() const;

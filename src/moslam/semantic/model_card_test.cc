@@ -92,6 +92,35 @@ TEST(ModelCard, SetMovableReplacesTheMovableClasses) {
               AllOf(HasSubstr("--movable"), HasSubstr("boat")));
 }
 
+TEST(ModelCard, TorchCardsTakeSizeAndClassesFromTheModelFile) {
+  testing::TempDir dir;
+  dir.Write("net.mnet", "x");
+  const ModelCard card =
+      LoadModelCard(dir.Write("card.yaml", "%YAML:1.0\ntype: torch\nmodel: net.mnet\n"), "/none");
+  EXPECT_EQ(card.kind, ModelKind::kTorch);
+  EXPECT_STREQ(ToString(card.kind), "torch");
+  EXPECT_EQ(card.input_width, 0);
+  EXPECT_TRUE(card.classes.empty());
+  EXPECT_TRUE(card.movable.empty());
+  EXPECT_DOUBLE_EQ(card.scale, 1.0 / 127.5);  // what the networks take: RGB in [-1, 1]
+  // Given classes are still checked as in any card.
+  EXPECT_THAT(ErrorOf([&] {
+                LoadModelCard(dir.Write("bad.yaml",
+                                        "%YAML:1.0\ntype: torch\nmodel: net.mnet\n"
+                                        "classes: [a, b]\nmovable: [c]\n"),
+                              "/none");
+              }),
+              AllOf(HasSubstr("movable"), HasSubstr("'c'")));
+  // An ONNX card still needs its input size.
+  EXPECT_THAT(ErrorOf([&] {
+                LoadModelCard(dir.Write("onnx.yaml",
+                                        "%YAML:1.0\ntype: segmentation\nmodel: net.mnet\n"
+                                        "classes: [a, b]\nmovable: [b]\n"),
+                              "/none");
+              }),
+              HasSubstr("input_width"));
+}
+
 // The cards shipped in configs/models/ parse and name models that exist in the shared folder.
 TEST(ModelCard, ShippedCardsLoad) {
   MOSLAM_SHARED_OR_SKIP(models, "models");
