@@ -65,6 +65,17 @@ torch::nn::Conv2d MakeConv(int in, int out, int kernel, int stride, int dilation
                                .bias(true));
 }
 
+// A 1x1 convolution as one matrix product on the NHWC layout (no copy when x is channels-last).
+// libtorch 1.13 sends single-threaded 1x1 convs to its slow im2col path, which also converts
+// layouts back and forth; the GEMM is the same arithmetic without those copies.
+torch::Tensor Pointwise(const torch::Tensor& x, const torch::Tensor& weight,
+                        const torch::Tensor& bias) {
+  const int64_t n = x.size(0), c = x.size(1), h = x.size(2), w = x.size(3);
+  const torch::Tensor rows = x.permute({0, 2, 3, 1}).reshape({n * h * w, c});
+  const torch::Tensor y = torch::addmm(bias, rows, weight.view({weight.size(0), c}).t());
+  return y.view({n, h, w, weight.size(0)}).permute({0, 3, 1, 2});
+}
+
 // One torchvision block with BatchNorm folded into conv biases. Convs are registered as c0, c1,
 // c2 in forward order; TorchvisionNames() says where each one's weights live in torchvision.
 class BlockImpl : public torch::nn::Module {
@@ -88,8 +99,10 @@ class BlockImpl : public torch::nn::Module {
   torch::Tensor forward(torch::Tensor x) {
     torch::Tensor y = x;
     for (size_t i = 0; i < convs_.size(); ++i) {
-      y = convs_[i]->forward(y);
-      if (relu_[i]) y = torch::hardtanh(y, 0.0, 6.0);  // ReLU6
+      torch::nn::Conv2d& conv = convs_[i];
+      y = conv->options.kernel_size()->at(0) == 1 ? Pointwise(y, conv->weight, conv->bias)
+                                                  : conv->forward(y);
+      if (relu_[i]) y = torch::hardtanh_(y, 0.0, 6.0);  // ReLU6; autograd keeps the result
     }
     return residual_ ? y + x : y;
   }
@@ -191,6 +204,7 @@ MobileNetV2Impl::MobileNetV2Impl(const BackboneOptions& options) : options_(opti
     for (torch::nn::Conv2d conv : block->convs()) InitializeConv(conv);
     blocks_->push_back(block);
   }
+  UseChannelsLast(*this);
   ApplyFreezing();
 }
 
@@ -198,7 +212,7 @@ torch::Tensor MobileNetV2Impl::forward(torch::Tensor x) {
   if (x.dim() != 4 || x.size(1) != 3) {
     ThrowInput("MobileNetV2 wants N x 3 x H x W input (got {} dimensions)", x.dim());
   }
-  return blocks_->forward(x);
+  return blocks_->forward(x.contiguous(torch::MemoryFormat::ChannelsLast));
 }
 
 int MobileNetV2Impl::out_channels() const { return BlockChannels(options_.last_block); }
@@ -261,6 +275,13 @@ void LoadImageNetWeights(const std::string& torchscript_path, MobileNetV2& backb
   }
   backbone->ApplyFreezing();
   spdlog::debug("MobileNetV2: {} convs loaded from {}", copied, torchscript_path);
+}
+
+void UseChannelsLast(torch::nn::Module& module) {
+  torch::NoGradGuard no_grad;
+  for (torch::Tensor& p : module.parameters()) {
+    if (p.dim() == 4) p.set_data(p.contiguous(torch::MemoryFormat::ChannelsLast));
+  }
 }
 
 std::string DefaultImageNetWeightsPath() {

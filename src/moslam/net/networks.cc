@@ -145,6 +145,7 @@ ClassifierNetImpl::ClassifierNetImpl(const NetConfig& config) : config_(config) 
   class_map_ =
       register_module("class_map", Conv(backbone_->out_channels(), config_.num_classes(), 1));
   InitClassConv(class_map_);
+  UseChannelsLast(*this);
 }
 
 ClassifierOutput ClassifierNetImpl::forward(torch::Tensor x) {
@@ -180,6 +181,7 @@ SegmenterNetImpl::SegmenterNetImpl(const NetConfig& config) : config_(config) {
   InitClassConv(classify_);
   aux_class_map_ = register_module("aux_class_map", Conv(in, classes, 1));
   InitClassConv(aux_class_map_);
+  UseChannelsLast(*this);
 }
 
 SegmenterOutput SegmenterNetImpl::forward(torch::Tensor x) {

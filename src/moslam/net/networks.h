@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
+#include <torch/torch.h>
 #include <nlohmann/json_fwd.hpp>
 #include <opencv2/core.hpp>
-#include <torch/torch.h>
 
 #include "moslam/net/mobilenet_v2.h"
 

@@ -2,7 +2,10 @@
 // NetConfig and larger inputs / deeper backbones. Weights are random (ImageNet-initialized nets
 // cost the same); 11 classes as CamVid. Args: input width, input height, last_block, stride.
 //
-//   MOSLAM_SHARED=/work/shared ./build/src/moslam/net/bench_net_segmenter
+//   OMP_WAIT_POLICY=passive ./build/src/moslam/net/bench_net_segmenter
+//   MOSLAM_BENCH_THREADS=1 ./build/src/moslam/net/bench_net_segmenter
+#include <algorithm>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -15,6 +18,14 @@
 namespace moslam::net {
 namespace {
 
+// Intra-op threads: MOSLAM_BENCH_THREADS, default 2 (the target machine's cores). With 1 thread
+// the CPU column is the compute cost even on a busy machine; with 2 on a busy machine, set
+// OMP_WAIT_POLICY=passive or the OpenMP barrier spinning dominates the wall time.
+int Threads() {
+  const char* value = std::getenv("MOSLAM_BENCH_THREADS");
+  return value != nullptr ? std::max(1, std::atoi(value)) : 2;
+}
+
 void BM_TorchSegmenterRun(benchmark::State& state) {
   NetConfig config;
   config.kind = NetKind::kSegmenter;
@@ -26,7 +37,7 @@ void BM_TorchSegmenterRun(benchmark::State& state) {
   config.backbone.last_block = static_cast<int>(state.range(2));
   config.backbone.output_stride = static_cast<int>(state.range(3));
   torch::manual_seed(0);
-  at::set_num_threads(2);
+  at::set_num_threads(Threads());
   TorchSegmenter segmenter{SegmenterNet(config)};
   cv::Mat image(360, 480, CV_8UC3);
   cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(256));
@@ -42,6 +53,30 @@ void BM_TorchSegmenterRun(benchmark::State& state) {
 BENCHMARK(BM_TorchSegmenterRun)
     ->ArgNames({"w", "h", "block", "os"})
     ->Args({320, 240, 13, 16})  // the default NetConfig
+    ->Args({480, 360, 13, 16})
+    ->Args({320, 240, 17, 16})
+    ->Args({480, 360, 17, 16})
+    ->Args({320, 240, 13, 8})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0);
+
+// The backbone alone on the same input sizes: how the time splits between backbone and head.
+void BM_Backbone(benchmark::State& state) {
+  BackboneOptions options;
+  options.last_block = static_cast<int>(state.range(2));
+  options.output_stride = static_cast<int>(state.range(3));
+  torch::manual_seed(0);
+  at::set_num_threads(Threads());
+  MobileNetV2 backbone(options);
+  backbone->eval();
+  c10::InferenceMode inference;
+  const torch::Tensor x = torch::rand({1, 3, state.range(1), state.range(0)}) * 2 - 1;
+  backbone->forward(x);
+  for (auto _ : state) benchmark::DoNotOptimize(backbone->forward(x).data_ptr());
+}
+BENCHMARK(BM_Backbone)
+    ->ArgNames({"w", "h", "block", "os"})
+    ->Args({320, 240, 13, 16})
     ->Args({480, 360, 13, 16})
     ->Args({320, 240, 17, 16})
     ->Args({480, 360, 17, 16})

@@ -13,8 +13,8 @@
 namespace moslam::net {
 
 struct TorchSegmentation {
-  cv::Mat probabilities;             // {C, h, w} CV_32F softmax at the network's output stride
-  std::vector<float> class_scores;   // per class: sigmoid of the auxiliary image-level logits
+  cv::Mat probabilities;            // {C, h, w} CV_32F softmax at the network's output stride
+  std::vector<float> class_scores;  // per class: sigmoid of the auxiliary image-level logits
 };
 
 class TorchSegmenter {
