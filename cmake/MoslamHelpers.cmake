@@ -25,8 +25,11 @@ function(moslam_test module name)
   add_test(NAME ${module}/${name} COMMAND ${target})
   # Tests run from the source tree so that relative paths in messages are short; shared data is
   # found through MOSLAM_SHARED (see src/moslam/testing/shared_data.h).
+  # OMP_WAIT_POLICY: libtorch's OpenMP threads must not spin while ctest runs tests in parallel
+  # (apps/moslam/main.cc says why).
   set_tests_properties(${module}/${name} PROPERTIES WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
-                                                    LABELS ${module})
+                                                    LABELS ${module}
+                                                    ENVIRONMENT OMP_WAIT_POLICY=passive)
 endfunction()
 
 function(moslam_benchmark name)

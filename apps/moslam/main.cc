@@ -1,5 +1,8 @@
 // moslam: movable-object-aware visual SLAM. One binary, one subcommand per job.
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 
 #include <spdlog/spdlog.h>
@@ -10,6 +13,14 @@
 #include "moslam/util/log.h"
 
 int main(int argc, char** argv) {
+  // libtorch's OpenMP threads (libgomp) spin while they wait by default. Beside tracking and
+  // mapping threads on a 2-core machine that made a network 10-70x slower; libgomp reads its wait
+  // policy when it is loaded, before main, so the only way to change it from here is to run
+  // again with it set. A policy the user sets is kept.
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
+    setenv("OMP_WAIT_POLICY", "passive", 1);
+    execv("/proc/self/exe", argv);  // returns only on failure: go on with the default policy
+  }
   CLI::App app{"moslam: movable-object-aware visual SLAM (ORB-SLAM2 family) and its tools"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "moslam 0.1.0");

@@ -120,7 +120,7 @@ void WritePreviews(net::ClassifierNet& net, const ImageList& list,
       panels.push_back(RenderCam(semantic::LabelPlane(cams, c), sample.image));
       captions.push_back(fmt::format("{} {:.2f}", list.class_names[c], scores[c]));
     }
-    cv::imwrite(fmt::format("{}/cam_{:04d}.jpg", folder, i),
+    cv::imwrite(fmt::format("{}/cam_{:04d}.png", folder, i),
                 internal::SideBySide(panels, captions));
   }
 }

@@ -186,7 +186,7 @@ void GenerateCues(const CueGenerationOptions& options) {
     if (static_cast<int>(i) < options.preview_images) {
       panels.push_back(RenderCue(fused, sample.image));
       captions.push_back("fused");
-      cv::imwrite(fmt::format("{}/cues_{:04d}.jpg", preview_folder, i),
+      cv::imwrite(fmt::format("{}/cues_{:04d}.png", preview_folder, i),
                   internal::SideBySide(panels, captions));
     }
     progress.Update(i + 1);

@@ -123,7 +123,7 @@ void WritePreviews(net::SegmenterNet& net, const ImageList& list,
                     .mode(torch::kBilinear)
                     .align_corners(false));
     const cv::Mat prediction = LabelsToMat(up.squeeze(0).argmax(0));
-    cv::imwrite(fmt::format("{}/seg_{:04d}.jpg", folder, i),
+    cv::imwrite(fmt::format("{}/seg_{:04d}.png", folder, i),
                 internal::SideBySide({s.image, RenderCue(s.cue, s.image),
                                       RenderCue(prediction, s.image)},
                                      {"image", "fused cue", "prediction"}));

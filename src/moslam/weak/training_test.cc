@@ -110,7 +110,7 @@ TEST_F(TrainingTest, ClassifierLearnsToyTaskAndCamsPeakOnObjects) {
   const TrainSummary summary = TrainClassifier(ToyClassifier(data_, dir_.path() + "/cls", weights));
   ASSERT_TRUE(fs::exists(summary.model));
   EXPECT_TRUE(fs::exists(dir_.path() + "/cls/curve.png"));
-  EXPECT_TRUE(fs::exists(dir_.path() + "/cls/preview/cam_0000.jpg"));
+  EXPECT_TRUE(fs::exists(dir_.path() + "/cls/preview/cam_0000.png"));
   net::ClassifierNet net = net::LoadClassifier(summary.model);
   net->eval();
   int correct = 0, total = 0, peaks_inside = 0, peaks = 0;
