@@ -24,6 +24,9 @@ void AddDataOptions(CLI::App* cmd, weak::DataSource* data) {
   cmd->add_option("--synthetic", data->synthetic, "`moslam synth --train` output folder");
   cmd->add_option("--list", data->list, "image list: `<image> <class> ...` per line");
   cmd->add_option("--classes", data->classes, "classes file for --list: `<id> <name> <movable>`");
+  cmd->add_option("--keep-classes", data->keep_classes,
+                  "train only these classes; all others become 'background'")
+      ->delimiter(',');
 }
 
 void AddCommonOptions(CLI::App* cmd, weak::CommonTrainOptions* o) {
@@ -95,6 +98,9 @@ void AddTrainCommand(CLI::App& app) {
   q->add_option("--superpixel-size", cues.cues.superpixel_size, "SLIC region size, pixels")
       ->capture_default_str();
   q->add_option("--agreement", cues.cues.agreement, "superpixel vote needed to keep a label")
+      ->capture_default_str();
+  q->add_option("--min-coverage", cues.cues.min_coverage,
+                "fraction of a superpixel that must be seeded for it to keep a label")
       ->capture_default_str();
   q->add_option("--threads", cues.threads, "libtorch intra-op threads")->capture_default_str();
   q->add_option("--max-images", cues.max_images, "first N images only (0: all)");

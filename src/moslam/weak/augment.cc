@@ -105,7 +105,17 @@ std::vector<int> SampleClasses(const ImageList& list, const ImageListEntry& entr
   const bool whole = roi == cv::Rect(0, 0, size.width, size.height);
   if (entry.label_image.empty() || whole) return entry.classes;
   const cv::Mat ids = ReadSingleChannel(entry.label_image, size, "a label image");
-  return CropLabels(ids, roi, list.num_classes(), list.label_min_fraction);
+  if (list.label_to_class.empty()) {
+    return CropLabels(ids, roi, list.num_classes(), list.label_min_fraction);
+  }
+  std::vector<int> classes;
+  for (int id : CropLabels(ids, roi, static_cast<int>(list.label_to_class.size()),
+                           list.label_min_fraction)) {
+    if (list.label_to_class[id] >= 0) classes.push_back(list.label_to_class[id]);
+  }
+  std::sort(classes.begin(), classes.end());
+  classes.erase(std::unique(classes.begin(), classes.end()), classes.end());
+  return classes;
 }
 
 }  // namespace

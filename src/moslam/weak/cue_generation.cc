@@ -3,6 +3,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
 #include <map>
 
 #include <fmt/format.h>
@@ -50,25 +51,29 @@ std::vector<CueModel> LoadModels(const CueGenerationOptions& options, const Imag
 // ids are the class indices; synthetic ids are mapped by name through its classes.txt.
 std::vector<int> EvalMapping(const CueGenerationOptions& options,
                              const std::vector<std::string>& seg_classes) {
+  std::vector<std::string> id_names;  // label id -> class name in the label images
   if (!options.data.camvid.empty()) {
-    std::vector<int> mapping(256, -1);
-    for (size_t i = 0; i < seg_classes.size(); ++i) mapping[i] = static_cast<int>(i);
-    return mapping;
-  }
-  if (!options.data.synthetic.empty()) {
+    id_names = ReadCamVid(options.data.camvid, options.data.split).class_names;
+  } else if (!options.data.synthetic.empty()) {
     const ImageList classes = ReadClassesFile(options.data.synthetic + "/classes.txt");
-    std::vector<int> mapping(256, -1);
-    std::vector<std::string> names = classes.class_names;
+    id_names = classes.class_names;
     // ReadClassesFile keeps the background out of the labels; its id is 0 in the generator.
-    if (!classes.background.empty()) names.insert(names.begin(), classes.background);
-    for (size_t id = 0; id < names.size(); ++id) {
-      for (size_t c = 0; c < seg_classes.size(); ++c) {
-        if (seg_classes[c] == names[id]) mapping[id] = static_cast<int>(c);
-      }
-    }
-    return mapping;
+    if (!classes.background.empty()) id_names.insert(id_names.begin(), classes.background);
+  } else {
+    return {};
   }
-  return {};
+  // Names not among the segmenter's classes are the background (KeepClasses merged them).
+  const auto background = std::find(seg_classes.begin(), seg_classes.end(), "background");
+  std::vector<int> mapping(256, -1);
+  for (size_t id = 0; id < id_names.size(); ++id) {
+    const auto it = std::find(seg_classes.begin(), seg_classes.end(), id_names[id]);
+    if (it != seg_classes.end()) {
+      mapping[id] = static_cast<int>(it - seg_classes.begin());
+    } else if (background != seg_classes.end()) {
+      mapping[id] = static_cast<int>(background - seg_classes.begin());
+    }
+  }
+  return mapping;
 }
 
 // The classifier has no background output; SeedsFromCams takes the background as one more
@@ -179,7 +184,7 @@ void GenerateCues(const CueGenerationOptions& options) {
     }
     if (!mapping.empty()) {
       const std::string label_path =
-          (fs::path(options.eval_labels) / fs::path(list.entries[i].image).filename()).string();
+          (fs::path(options.eval_labels) / fs::path(list.entries[i].image).stem()).string() + ".png";
       const cv::Mat labels = cv::imread(label_path, cv::IMREAD_GRAYSCALE);
       if (labels.size() == cue.size()) AddEvaluation(cue, labels, mapping, &stats);
     }

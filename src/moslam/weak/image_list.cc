@@ -253,4 +253,39 @@ ImageList ReadSyntheticTraining(const std::string& folder) {
   return ReadImageList((fs::path(folder) / "labels.txt").string(), classes);
 }
 
+ImageList KeepClasses(const ImageList& list, const std::vector<std::string>& keep,
+                      const std::string& background) {
+  ImageList out;
+  out.background = background;
+  out.label_min_fraction = list.label_min_fraction;
+  std::vector<int> old_to_new(list.class_names.size(), -1);
+  for (const std::string& name : keep) {
+    const int old = list.ClassIndex(name);
+    if (old < 0) {
+      throw InputError(fmt::format("KeepClasses: unknown class '{}' (classes: {})", name,
+                                   fmt::join(list.class_names, ", ")));
+    }
+    old_to_new[old] = out.num_classes();
+    out.class_names.push_back(name);
+    out.movable.push_back(list.movable[old]);
+  }
+  // Label ids map through the old classes (identity when the old list had no mapping).
+  const size_t ids = list.label_to_class.empty() ? list.class_names.size() : list.label_to_class.size();
+  out.label_to_class.assign(ids, -1);
+  for (size_t id = 0; id < ids; ++id) {
+    const int old = list.label_to_class.empty() ? static_cast<int>(id) : list.label_to_class[id];
+    if (old >= 0) out.label_to_class[id] = old_to_new[old];
+  }
+  for (const ImageListEntry& entry : list.entries) {
+    ImageListEntry e = entry;
+    e.classes.clear();
+    for (int c : entry.classes) {
+      if (old_to_new[c] >= 0) e.classes.push_back(old_to_new[c]);
+    }
+    std::sort(e.classes.begin(), e.classes.end());
+    out.entries.push_back(std::move(e));
+  }
+  return out;
+}
+
 }  // namespace moslam::weak

@@ -37,6 +37,9 @@ struct ImageList {
   // The rule by which entries with a label_image were labelled (ReadCamVid's min_fraction):
   // crops are relabelled by the same rule (augment.h).
   double label_min_fraction = 0.001;
+  // Label id (in label images) -> class index, -1 for ids that belong to no class (e.g. merged
+  // into the background by KeepClasses); empty means the identity (id = class index).
+  std::vector<int> label_to_class;
 
   int num_classes() const { return static_cast<int>(class_names.size()); }
   int ClassIndex(const std::string& name) const;  // -1 when absent
@@ -65,6 +68,13 @@ void WriteImageList(const std::string& path, const ImageList& list);
 // others when false: a deterministic split into training and held-out parts. every >= 2
 // (InputError otherwise).
 ImageList SplitHoldout(const ImageList& list, int every, bool holdout);
+
+// The list restricted to the classes `keep` (by name, in that order); every other class is
+// merged into a background class named `background` (e.g. CamVid's stuff classes become
+// "background" for a car/pedestrian/bicyclist model). Image labels and label_to_class follow.
+// InputError naming an unknown class.
+ImageList KeepClasses(const ImageList& list, const std::vector<std::string>& keep,
+                      const std::string& background = "background");
 
 // CamVid: images in <root>/<split>/, labels in <root>/<split>annot/ (ids 0..11, 11 = unlabelled,
 // never a class). Classes are CamVid's 11 named classes in id order; Car, Pedestrian and

@@ -33,6 +33,9 @@ struct DataSource {
   std::string camvid;     // CamVid root (ReadCamVid), with `split`
   std::string split = "train";
   std::string synthetic;  // a `moslam synth --train` folder
+  // When not empty: only these classes are kept, all others merged into a "background" class
+  // (KeepClasses), e.g. {Car, Pedestrian, Bicyclist} on CamVid.
+  std::vector<std::string> keep_classes;
 
   void Check() const;  // InputError when none or several are set
   ImageList Load() const;

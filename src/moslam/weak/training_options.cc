@@ -21,9 +21,15 @@ void DataSource::Check() const {
 
 ImageList DataSource::Load() const {
   Check();
-  if (!camvid.empty()) return ReadCamVid(camvid, split);
-  if (!synthetic.empty()) return ReadSyntheticTraining(synthetic);
-  return ReadImageList(list, ReadClassesFile(classes));
+  ImageList loaded;
+  if (!camvid.empty()) {
+    loaded = ReadCamVid(camvid, split);
+  } else if (!synthetic.empty()) {
+    loaded = ReadSyntheticTraining(synthetic);
+  } else {
+    loaded = ReadImageList(list, ReadClassesFile(classes));
+  }
+  return keep_classes.empty() ? loaded : KeepClasses(loaded, keep_classes);
 }
 
 std::vector<std::string> SegmenterClasses(const ImageList& list) {
