@@ -29,12 +29,32 @@ struct CueModel {
   std::string name;  // "colour" or "grey"
 };
 
+// The list whose classes the classifiers were trained on: the training list itself, or, when it
+// was restricted with keep_classes, possibly the unrestricted list (classifiers trained on every
+// class localize better, since the other classes explain the rest of the image; their seeds are
+// then merged into the kept classes and the background, see SeedMapping).
+ImageList ClassifierList(const CueGenerationOptions& options, const ImageList& list,
+                         const std::vector<std::string>& classifier_classes) {
+  if (classifier_classes == list.class_names || options.data.keep_classes.empty()) return list;
+  DataSource full = options.data;
+  full.keep_classes.clear();
+  ImageList all = full.Load();
+  all.entries.resize(list.entries.size());
+  return all;
+}
+
 std::vector<CueModel> LoadModels(const CueGenerationOptions& options, const ImageList& list) {
   std::vector<CueModel> models;
   for (const auto& [path, name] :
        {std::pair{options.colour_model, "colour"}, std::pair{options.grey_model, "grey"}}) {
     if (path.empty()) continue;
     CueModel model{net::LoadClassifier(path), name};
+    if (!models.empty() && model.net->config().classes != models[0].net->config().classes) {
+      throw InputError(fmt::format("the colour and grey classifiers have different classes: [{}] "
+                                   "and [{}]",
+                                   fmt::join(models[0].net->config().classes, ", "),
+                                   fmt::join(model.net->config().classes, ", ")));
+    }
     if (model.net->config().classes != list.class_names) {
       throw InputError(fmt::format("{} classifier {} has classes [{}], the data has [{}]", name,
                                    path, fmt::join(model.net->config().classes, ", "),
@@ -45,6 +65,27 @@ std::vector<CueModel> LoadModels(const CueGenerationOptions& options, const Imag
   }
   if (models.empty()) throw InputError("cues: give --colour-model and/or --grey-model");
   return models;
+}
+
+// Seed value of the classifier's list (class index, or num_classes for its background) ->
+// segmenter class index: by name, and every class the segmenter does not have is background.
+std::vector<uint8_t> SeedMapping(const ImageList& from, const std::vector<std::string>& seg) {
+  const auto background = std::find(seg.begin(), seg.end(), "background");
+  const int seg_background =
+      background == seg.end() ? kUnknown : static_cast<int>(background - seg.begin());
+  std::vector<uint8_t> mapping(256, kUnknown);
+  for (int c = 0; c < from.num_classes(); ++c) {
+    const auto it = std::find(seg.begin(), seg.end(), from.class_names[c]);
+    mapping[c] = it != seg.end() ? static_cast<uint8_t>(it - seg.begin()) : seg_background;
+  }
+  if (!from.background.empty()) mapping[from.num_classes()] = seg_background;
+  return mapping;
+}
+
+cv::Mat MapSeeds(const cv::Mat& seeds, const std::vector<uint8_t>& mapping) {
+  cv::Mat out;
+  cv::LUT(seeds, mapping, out);
+  return out;
 }
 
 // Label id -> segmenter class index (-1: not counted) for reporting the cues' precision: CamVid
@@ -119,9 +160,14 @@ void GenerateCues(const CueGenerationOptions& options) {
   if (options.max_images > 0 && static_cast<int>(list.entries.size()) > options.max_images) {
     list.entries.resize(options.max_images);
   }
-  std::vector<CueModel> models = LoadModels(options, list);
+  const std::vector<std::string> classifier_classes =
+      net::ReadNetConfig(options.colour_model.empty() ? options.grey_model : options.colour_model)
+          .classes;
+  const ImageList cam_list = ClassifierList(options, list, classifier_classes);
+  std::vector<CueModel> models = LoadModels(options, cam_list);
   const std::vector<std::string> seg_classes = SegmenterClasses(list);
-  const int background = list.background.empty() ? -1 : list.num_classes();
+  const std::vector<uint8_t> to_seg = SeedMapping(cam_list, seg_classes);
+  const int background = cam_list.background.empty() ? -1 : cam_list.num_classes();
   const net::NetConfig& config = models[0].net->config();
   AugmentOptions resize;
   resize.output_width = config.input_width;
@@ -138,7 +184,7 @@ void GenerateCues(const CueGenerationOptions& options) {
   Progress progress("cues", list.entries.size(), 10.0, "img");
   std::mt19937_64 rng(1);
   for (size_t i = 0; i < list.entries.size(); ++i) {
-    const Sample sample = LoadSample(list, static_cast<int>(i), resize, rng, false);
+    const Sample sample = LoadSample(cam_list, static_cast<int>(i), resize, rng, false);
     std::vector<cv::Mat> refined, panels = {sample.image};
     std::vector<std::string> captions = {"image"};
     for (CueModel& model : models) {
@@ -149,15 +195,15 @@ void GenerateCues(const CueGenerationOptions& options) {
         cv::cvtColor(grey, input, cv::COLOR_GRAY2BGR);
       }
       const cv::Mat cams = internal::ComputeCams(model.net, input, nullptr);
-      const cv::Mat seeds =
-          SeedsFromCams(WithBackgroundPlane(cams, background), sample.classes, background,
-                        options.cues);
+      const cv::Mat seeds = MapSeeds(SeedsFromCams(WithBackgroundPlane(cams, background),
+                                                   sample.classes, background, options.cues),
+                                     to_seg);
       refined.push_back(RefineWithSuperpixels(seeds, input, options.cues));
       if (static_cast<int>(i) < options.preview_images) {
         for (int c : sample.classes) {
-          if (list.movable[c]) {
+          if (cam_list.movable[c]) {
             panels.push_back(RenderCam(semantic::LabelPlane(cams, c), input));
-            captions.push_back(model.name + " CAM " + list.class_names[c]);
+            captions.push_back(model.name + " CAM " + cam_list.class_names[c]);
           }
         }
         panels.push_back(RenderCue(seeds, input));
