@@ -45,6 +45,8 @@ struct SegEvalArgs {
   float suppress_below = 0.0f;
   std::vector<int> label_movable = {8, 9, 10};
   std::vector<int> label_ignore = {11};
+  // Class names of the label ids, in id order (CamVid's when empty).
+  std::vector<std::string> label_names;
   int threads = 2;
   int limit = 0;
 };
@@ -52,9 +54,11 @@ struct SegEvalArgs {
 // Ground-truth id -> model class: by CamVid class name when the model names CamVid classes (ids
 // whose class the model lacks go to its background class, else count as misses); otherwise the
 // identity (the model's classes are taken to be the label ids).
-std::vector<int> LabelToClass(const semantic::ModelCard& card) {
-  std::vector<int> mapping =
-      weak::LabelToClassByName(weak::CamVidLabelNames(), card.classes, card.BackgroundIndex());
+std::vector<int> LabelToClass(const semantic::ModelCard& card,
+                              const std::vector<std::string>& label_names) {
+  std::vector<int> mapping = weak::LabelToClassByName(
+      label_names.empty() ? weak::CamVidLabelNames() : label_names, card.classes,
+      card.BackgroundIndex());
   if (mapping.empty()) {
     spdlog::warn("{}: no class is named like a CamVid class; label id i is taken to be class i",
                  card.name);
@@ -160,7 +164,7 @@ void Run(const SegEvalArgs& args) {
 
   weak::SegEvalOptions options;
   options.ignore_labels = args.label_ignore;
-  options.label_to_class = LabelToClass(card);
+  options.label_to_class = LabelToClass(card, args.label_names);
   options.movable_labels.assign(256, false);
   for (int id : args.label_movable) {
     if (id < 0 || id > 255) ThrowInput("--label-movable: {} is not an 8-bit label id", id);
@@ -290,6 +294,10 @@ void AddSegEvalCommand(CLI::App& app) {
   cmd->add_option("--label-movable", args->label_movable, "Label ids that are movable")
       ->delimiter(',')
       ->capture_default_str();
+  cmd->add_option("--label-names", args->label_names,
+                  "Class names of the label ids in id order, matched to the model's classes by "
+                  "name (default: CamVid's; e.g. the synthetic generator's classes.txt names)")
+      ->delimiter(',');
   cmd->add_option("--label-ignore", args->label_ignore, "Label ids left out of every score")
       ->delimiter(',')
       ->capture_default_str();

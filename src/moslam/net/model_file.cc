@@ -30,7 +30,8 @@ std::string KindName(NetKind kind) {
 c10::Dict<std::string, at::Tensor> Weights(torch::nn::Module& net, bool half) {
   c10::Dict<std::string, at::Tensor> weights;
   auto add = [&](const std::string& name, const torch::Tensor& t) {
-    torch::Tensor value = t.detach().clone();
+    // On the CPU, so that a model trained on a GPU loads anywhere.
+    torch::Tensor value = t.detach().to(torch::kCPU).clone();
     if (half && value.is_floating_point()) value = value.to(torch::kFloat16);
     weights.insert(name, value);
   };

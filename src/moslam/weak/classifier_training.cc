@@ -22,7 +22,8 @@ namespace internal {
 
 cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<float>* scores) {
   torch::NoGradGuard no_grad;
-  const torch::Tensor input = ToInputTensor(image).unsqueeze(0);
+  const torch::Device device = net->parameters().front().device();
+  const torch::Tensor input = ToInputTensor(image).unsqueeze(0).to(device);
   const net::ClassifierOutput out = net->forward(input);
   const torch::Tensor cams =
       torch::nn::functional::interpolate(
@@ -31,12 +32,13 @@ cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<f
                         .mode(torch::kBilinear)
                         .align_corners(false))
           .squeeze(0)
+          .to(torch::kCPU)
           .contiguous();
   const int sizes[] = {static_cast<int>(cams.size(0)), image.rows, image.cols};
   cv::Mat result(3, sizes, CV_32F);
   std::memcpy(result.data, cams.data_ptr<float>(), cams.numel() * sizeof(float));
   if (scores) {
-    const torch::Tensor s = torch::sigmoid(out.logits.squeeze(0)).contiguous();
+    const torch::Tensor s = torch::sigmoid(out.logits.squeeze(0)).to(torch::kCPU).contiguous();
     scores->assign(s.data_ptr<float>(), s.data_ptr<float>() + s.numel());
   }
   return result;
@@ -135,6 +137,8 @@ TrainSummary TrainClassifier(const ClassifierTrainOptions& options_in) {
   torch::manual_seed(common.seed);
   const ImageList list = LoadTrainingList(common);
   net::ClassifierNet net = BuildClassifier(options, list, &common);
+  const torch::Device device = internal::TrainingDevice();
+  net->to(device);
   auto optimizer = internal::MakeOptimizer(*net->backbone(), *net, common);
   spdlog::info("classifier ({}): {} images, {} classes, input {}x{}, {} epochs of batch {}",
                net->config().grey ? "grey" : "colour", list.entries.size(), list.num_classes(),
@@ -151,17 +155,17 @@ TrainSummary TrainClassifier(const ClassifierTrainOptions& options_in) {
     std::vector<Sample> samples;
     for (int i : indices) samples.push_back(LoadSample(list, i, common.augment, rng, true));
     const Batch batch = MakeBatch(samples, list.num_classes());
-    const net::ClassifierOutput out = net->forward(batch.images);
-    const torch::Tensor loss =
-        torch::binary_cross_entropy_with_logits(out.logits, batch.labels);
+    const torch::Tensor labels = batch.labels.to(device);
+    const net::ClassifierOutput out = net->forward(batch.images.to(device));
+    const torch::Tensor loss = torch::binary_cross_entropy_with_logits(out.logits, labels);
     optimizer->zero_grad();
     loss.backward();
     optimizer->step();
     internal::StepStats stats;
     stats.loss = loss.item<double>();
     const torch::Tensor predicted = (out.logits.detach() > 0).to(torch::kFloat);
-    stats.correct = predicted.eq(batch.labels).sum().item<double>();
-    stats.count = static_cast<double>(batch.labels.numel());
+    stats.correct = predicted.eq(labels).sum().item<double>();
+    stats.count = static_cast<double>(labels.numel());
     stats.images = static_cast<int>(indices.size());
     return stats;
   };

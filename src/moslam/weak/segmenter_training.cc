@@ -116,7 +116,9 @@ void WritePreviews(net::SegmenterNet& net, const ImageList& list,
   const int count = std::min<int>(options.common.preview_images, list.entries.size());
   for (int i = 0; i < count; ++i) {
     const Sample s = LoadSample(list, i, resize, rng, false, CuePath(options.cues, i));
-    const torch::Tensor logits = net->forward(ToInputTensor(s.image).unsqueeze(0)).logits;
+    const torch::Device device = net->parameters().front().device();
+    const torch::Tensor logits =
+        net->forward(ToInputTensor(s.image).unsqueeze(0).to(device)).logits.to(torch::kCPU);
     const torch::Tensor up = torch::nn::functional::interpolate(
         logits, torch::nn::functional::InterpolateFuncOptions()
                     .size(std::vector<int64_t>{s.image.rows, s.image.cols})
@@ -148,6 +150,8 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
   }
   CheckCues(options, list);
   net::SegmenterNet net = BuildSegmenter(options, list, &common);
+  const torch::Device device = internal::TrainingDevice();
+  net->to(device);
   const int num_classes = net->config().num_classes();
   const int background = net->config().BackgroundIndex();
   auto optimizer = internal::MakeOptimizer(*net->backbone(), *net, common);
@@ -176,17 +180,18 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
     }
     Batch batch = MakeBatch(samples, num_classes);
     if (background >= 0) batch.labels.select(1, background).fill_(1.0);
-    const net::SegmenterOutput out = net->forward(batch.images);
+    const torch::Tensor labels = batch.labels.to(device);
+    const net::SegmenterOutput out = net->forward(batch.images.to(device));
     const int64_t h = out.logits.size(2), w = out.logits.size(3);
     if (!crf) {
       crf = std::make_unique<semantic::DenseCrf>(
           ScaledCrf(options.crf, static_cast<double>(batch.images.size(3)) / w));
     }
-    const torch::Tensor cues = DownsampleCues(batch.cues, h, w);
+    const torch::Tensor cues = DownsampleCues(batch.cues, h, w).to(device);
     const torch::Tensor seed = SeedingLoss(out.logits, cues);
     const torch::Tensor constrain = ConstrainLoss(out.logits, CrfTargets(out.logits, batch.bgr, *crf));
     const torch::Tensor classes =
-        torch::binary_cross_entropy_with_logits(out.class_logits, batch.labels);
+        torch::binary_cross_entropy_with_logits(out.class_logits, labels);
     const torch::Tensor loss =
         seed + options.constrain_weight * constrain + options.class_weight * classes;
     optimizer->zero_grad();

@@ -26,6 +26,15 @@ namespace moslam::weak::internal {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
+torch::Device TrainingDevice() {
+  if (torch::cuda::is_available()) {
+    spdlog::info("training on CUDA device 0 ({} visible)", torch::cuda::device_count());
+    return torch::Device(torch::kCUDA, 0);
+  }
+  spdlog::info("training on the CPU ({} threads)", at::get_num_threads());
+  return torch::Device(torch::kCPU);
+}
+
 void MakeFolder(const std::string& folder) {
   std::error_code error;
   fs::create_directories(folder, error);

@@ -85,6 +85,9 @@ namespace moslam::weak::internal {
 // receives the sigmoid class scores when not null.
 cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<float>* scores);
 
+// Where training runs: the first CUDA device when libtorch sees one, else the CPU (logged).
+torch::Device TrainingDevice();
+
 // Side-by-side panels with captions (for preview images); all panels are resized to the first's
 // height.
 cv::Mat SideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::string>& captions);
