@@ -117,7 +117,7 @@ cv::Mat RenderTrainingCurve(const std::vector<EpochRecord>& history, const std::
   if (hi <= 0.0) hi = 1.0;
   const std::vector<cv::Scalar> palette = {{200, 60, 20},  {30, 140, 30}, {150, 40, 150},
                                            {20, 120, 200}, {90, 90, 90},  {0, 180, 180}};
-  int legend_y = 440, legend_x = 70, colour_index = 0;
+  int legend_y = 465, legend_x = 70, colour_index = 0;
   for (const auto& [name, values] : series) {
     const cv::Scalar colour = palette[colour_index++ % palette.size()];
     DrawSeries(image, area, values, 0.0, hi, epochs, colour);
