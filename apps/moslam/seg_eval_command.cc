@@ -56,9 +56,9 @@ struct SegEvalArgs {
 // identity (the model's classes are taken to be the label ids).
 std::vector<int> LabelToClass(const semantic::ModelCard& card,
                               const std::vector<std::string>& label_names) {
-  std::vector<int> mapping = weak::LabelToClassByName(
-      label_names.empty() ? weak::CamVidLabelNames() : label_names, card.classes,
-      card.BackgroundIndex());
+  std::vector<int> mapping =
+      weak::LabelToClassByName(label_names.empty() ? weak::CamVidLabelNames() : label_names,
+                               card.classes, card.BackgroundIndex());
   if (mapping.empty()) {
     spdlog::warn("{}: no class is named like a CamVid class; label id i is taken to be class i",
                  card.name);

@@ -62,8 +62,7 @@ void AddBackboneOptions(CLI::App* cmd, net::NetConfig* net) {
       ->capture_default_str();
   cmd->add_option("--output-stride", net->backbone.output_stride, "8, 16 or 32")
       ->capture_default_str();
-  cmd->add_option("--frozen-blocks", net->backbone.frozen_blocks,
-                  "blocks 0..N-1 are not trained")
+  cmd->add_option("--frozen-blocks", net->backbone.frozen_blocks, "blocks 0..N-1 are not trained")
       ->capture_default_str();
 }
 

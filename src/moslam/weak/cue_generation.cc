@@ -1,9 +1,9 @@
 // GenerateCues (training.h): class activation maps of the colour and grey classifiers turned into
 // seeds, refined with superpixels and fused (Sun, Tai, Gao, Liu, Yeung 2019).
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <algorithm>
 #include <map>
 
 #include <fmt/format.h>
@@ -50,10 +50,11 @@ std::vector<CueModel> LoadModels(const CueGenerationOptions& options, const Imag
     if (path.empty()) continue;
     CueModel model{net::LoadClassifier(path), name};
     if (!models.empty() && model.net->config().classes != models[0].net->config().classes) {
-      throw InputError(fmt::format("the colour and grey classifiers have different classes: [{}] "
-                                   "and [{}]",
-                                   fmt::join(models[0].net->config().classes, ", "),
-                                   fmt::join(model.net->config().classes, ", ")));
+      throw InputError(
+          fmt::format("the colour and grey classifiers have different classes: [{}] "
+                      "and [{}]",
+                      fmt::join(models[0].net->config().classes, ", "),
+                      fmt::join(model.net->config().classes, ", ")));
     }
     if (model.net->config().classes != list.class_names) {
       throw InputError(fmt::format("{} classifier {} has classes [{}], the data has [{}]", name,
@@ -230,7 +231,8 @@ void GenerateCues(const CueGenerationOptions& options) {
     }
     if (!mapping.empty()) {
       const std::string label_path =
-          (fs::path(options.eval_labels) / fs::path(list.entries[i].image).stem()).string() + ".png";
+          (fs::path(options.eval_labels) / fs::path(list.entries[i].image).stem()).string() +
+          ".png";
       const cv::Mat labels = cv::imread(label_path, cv::IMREAD_GRAYSCALE);
       if (labels.size() == cue.size()) AddEvaluation(cue, labels, mapping, &stats);
     }

@@ -270,7 +270,8 @@ ImageList KeepClasses(const ImageList& list, const std::vector<std::string>& kee
     out.movable.push_back(list.movable[old]);
   }
   // Label ids map through the old classes (identity when the old list had no mapping).
-  const size_t ids = list.label_to_class.empty() ? list.class_names.size() : list.label_to_class.size();
+  const size_t ids =
+      list.label_to_class.empty() ? list.class_names.size() : list.label_to_class.size();
   out.label_to_class.assign(ids, -1);
   for (size_t id = 0; id < ids; ++id) {
     const int old = list.label_to_class.empty() ? static_cast<int>(id) : list.label_to_class[id];

@@ -125,10 +125,10 @@ void WritePreviews(net::SegmenterNet& net, const ImageList& list,
                     .mode(torch::kBilinear)
                     .align_corners(false));
     const cv::Mat prediction = LabelsToMat(up.squeeze(0).argmax(0));
-    cv::imwrite(fmt::format("{}/seg_{:04d}.png", folder, i),
-                internal::SideBySide({s.image, RenderCue(s.cue, s.image),
-                                      RenderCue(prediction, s.image)},
-                                     {"image", "fused cue", "prediction"}));
+    cv::imwrite(
+        fmt::format("{}/seg_{:04d}.png", folder, i),
+        internal::SideBySide({s.image, RenderCue(s.cue, s.image), RenderCue(prediction, s.image)},
+                             {"image", "fused cue", "prediction"}));
   }
 }
 
@@ -189,9 +189,9 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
     }
     const torch::Tensor cues = DownsampleCues(batch.cues, h, w).to(device);
     const torch::Tensor seed = SeedingLoss(out.logits, cues);
-    const torch::Tensor constrain = ConstrainLoss(out.logits, CrfTargets(out.logits, batch.bgr, *crf));
-    const torch::Tensor classes =
-        torch::binary_cross_entropy_with_logits(out.class_logits, labels);
+    const torch::Tensor constrain =
+        ConstrainLoss(out.logits, CrfTargets(out.logits, batch.bgr, *crf));
+    const torch::Tensor classes = torch::binary_cross_entropy_with_logits(out.class_logits, labels);
     const torch::Tensor loss =
         seed + options.constrain_weight * constrain + options.class_weight * classes;
     optimizer->zero_grad();
@@ -203,8 +203,7 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
                    {"constrain", constrain.item<double>()},
                    {"class", classes.item<double>()}};
     const torch::Tensor seeded = cues.ne(kUnknown);
-    stats.correct =
-        (out.logits.detach().argmax(1).eq(cues) & seeded).sum().item<double>();
+    stats.correct = (out.logits.detach().argmax(1).eq(cues) & seeded).sum().item<double>();
     stats.count = seeded.sum().item<double>();
     stats.images = static_cast<int>(indices.size());
     return stats;

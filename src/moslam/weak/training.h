@@ -28,9 +28,9 @@ std::vector<std::string> SegmenterClasses(const ImageList& list);
 
 // Where training images come from: exactly one of the three.
 struct DataSource {
-  std::string list;       // an image list (image_list.h); `classes` names its classes file
-  std::string classes;    // classes file for `list`
-  std::string camvid;     // CamVid root (ReadCamVid), with `split`
+  std::string list;     // an image list (image_list.h); `classes` names its classes file
+  std::string classes;  // classes file for `list`
+  std::string camvid;   // CamVid root (ReadCamVid), with `split`
   std::string split = "train";
   std::string synthetic;  // a `moslam synth --train` folder
   // When not empty: only these classes are kept, all others merged into a "background" class
@@ -43,17 +43,17 @@ struct DataSource {
 
 struct CommonTrainOptions {
   DataSource data;
-  std::string out;          // output folder (created)
+  std::string out;  // output folder (created)
   int epochs = 20;
   int batch_size = 8;
-  double learning_rate = 1e-3;   // Adam; the pretrained backbone gets backbone_lr_factor of it
+  double learning_rate = 1e-3;  // Adam; the pretrained backbone gets backbone_lr_factor of it
   double backbone_lr_factor = 0.1;
   double weight_decay = 1e-5;
   uint64_t seed = 1;
-  int threads = 2;          // at::set_num_threads
-  bool resume = false;      // continue from out/checkpoint.mnet when it exists
-  int max_images = 0;       // use only the first N images (0 = all): quick runs and tests
-  int preview_images = 6;   // images rendered into out/preview/ after training
+  int threads = 2;         // at::set_num_threads
+  bool resume = false;     // continue from out/checkpoint.mnet when it exists
+  int max_images = 0;      // use only the first N images (0 = all): quick runs and tests
+  int preview_images = 6;  // images rendered into out/preview/ after training
   AugmentOptions augment;
 
   void Check() const;
@@ -83,8 +83,8 @@ struct CueGenerationOptions {
 struct SegmenterTrainOptions {
   CommonTrainOptions common;
   net::NetConfig net;
-  std::string cues;              // folder written by GenerateCues
-  std::string init_classifier;   // backbone initialized from this classifier (else ImageNet)
+  std::string cues;             // folder written by GenerateCues
+  std::string init_classifier;  // backbone initialized from this classifier (else ImageNet)
   std::string imagenet_weights;
   double constrain_weight = 1.0;  // weight of the constrain-to-boundary loss
   double class_weight = 0.1;      // weight of the auxiliary image-level BCE
@@ -98,7 +98,7 @@ struct SegmenterTrainOptions {
 };
 
 struct TrainSummary {
-  std::string model;   // path of the final model
+  std::string model;  // path of the final model
   int epochs = 0;
   double final_loss = 0.0;
   double seconds = 0.0;

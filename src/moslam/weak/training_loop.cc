@@ -74,8 +74,8 @@ std::vector<EpochRecord> HistoryFromJson(const nlohmann::json& json) {
 namespace {
 
 // A polyline of `values` (one per epoch) in the plot rectangle, scaled to [lo, hi].
-void DrawSeries(cv::Mat& image, const cv::Rect& area, const std::vector<double>& values,
-                double lo, double hi, int epochs, const cv::Scalar& colour) {
+void DrawSeries(cv::Mat& image, const cv::Rect& area, const std::vector<double>& values, double lo,
+                double hi, int epochs, const cv::Scalar& colour) {
   std::vector<cv::Point> points;
   for (size_t i = 0; i < values.size(); ++i) {
     if (!std::isfinite(values[i])) continue;
@@ -273,8 +273,7 @@ TrainSummary RunTrainingLoop(const CommonTrainOptions& options, const LoopSpec& 
     spdlog::warn("{}: --resume given but {} does not exist; starting afresh", spec.name,
                  checkpoint);
   }
-  const int64_t batches_per_epoch =
-      (spec.num_images + options.batch_size - 1) / options.batch_size;
+  const int64_t batches_per_epoch = (spec.num_images + options.batch_size - 1) / options.batch_size;
   const int64_t total_steps = batches_per_epoch * options.epochs;
   int64_t step = batches_per_epoch * (first_epoch - 1);
   const auto start = Clock::now();

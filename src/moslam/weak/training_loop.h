@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include <torch/torch.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <torch/torch.h>
 
 #include "moslam/net/networks.h"
 #include "moslam/weak/training.h"
@@ -54,7 +54,8 @@ void SetPolyLearningRate(torch::optim::Adam& optimizer, const std::vector<double
                          int64_t step, int64_t total_steps);
 
 // One optimization step on the images `indices` (already shuffled into a batch).
-using StepFunction = std::function<StepStats(const std::vector<int>& indices, std::mt19937_64& rng)>;
+using StepFunction =
+    std::function<StepStats(const std::vector<int>& indices, std::mt19937_64& rng)>;
 
 struct LoopSpec {
   std::string name;  // "classifier (colour)", for progress lines and the curve's title

@@ -153,7 +153,8 @@ TEST_F(TrainingTest, ResumeContinuesFromTheCheckpoint) {
 
 TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   MOSLAM_SHARED_OR_SKIP(weights, kWeights);
-  const TrainSummary classifier = TrainClassifier(ToyClassifier(data_, dir_.path() + "/cls", weights));
+  const TrainSummary classifier =
+      TrainClassifier(ToyClassifier(data_, dir_.path() + "/cls", weights));
   CueGenerationOptions cues;
   cues.data.list = data_ + "/list.txt";
   cues.data.classes = data_ + "/classes.txt";
@@ -182,8 +183,7 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   const nlohmann::json history =
       nlohmann::json::parse(std::ifstream(dir_.path() + "/seg/history.json"));
   ASSERT_EQ(history.size(), 6u);
-  EXPECT_LT(history[5]["parts"]["seed"].get<double>(),
-            history[0]["parts"]["seed"].get<double>());
+  EXPECT_LT(history[5]["parts"]["seed"].get<double>(), history[0]["parts"]["seed"].get<double>());
   const net::SegmenterNet net = net::LoadSegmenter(summary.model);
   EXPECT_THAT(net->config().classes, ::testing::ElementsAre("square", "disc", "background"));
   EXPECT_THAT(net->config().movable, ::testing::ElementsAre("square"));
