@@ -72,14 +72,6 @@ cv::Mat SideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::st
 
 namespace {
 
-ImageList LoadTrainingList(const CommonTrainOptions& options) {
-  ImageList list = options.data.Load();
-  if (options.max_images > 0 && static_cast<int>(list.entries.size()) > options.max_images) {
-    list.entries.resize(options.max_images);
-  }
-  return list;
-}
-
 net::ClassifierNet BuildClassifier(const ClassifierTrainOptions& options, const ImageList& list,
                                    CommonTrainOptions* common) {
   net::NetConfig config = options.net;
@@ -134,7 +126,7 @@ TrainSummary TrainClassifier(const ClassifierTrainOptions& options_in) {
   common.Check();
   at::set_num_threads(common.threads);
   torch::manual_seed(common.seed);
-  const ImageList list = LoadTrainingList(common);
+  const ImageList list = internal::LoadTrainingList(common);
   net::ClassifierNet net = BuildClassifier(options, list, &common);
   const torch::Device device = internal::TrainingDevice();
   net->to(device);
@@ -171,15 +163,7 @@ TrainSummary TrainClassifier(const ClassifierTrainOptions& options_in) {
   spec.save_model = [&](const std::string& path) { net::SaveClassifier(path, net); };
   const TrainSummary summary = internal::RunTrainingLoop(common, spec);
   WritePreviews(net, list, common);
-  nlohmann::json report = {{"kind", "classifier"},
-                           {"model", summary.model},
-                           {"config", net::ToJson(net->config())},
-                           {"images", list.entries.size()},
-                           {"epochs", summary.epochs},
-                           {"final_loss", summary.final_loss},
-                           {"seconds_this_run", summary.seconds}};
-  std::ofstream(fs::path(common.out) / "report.json") << report.dump(2) << "\n";
-  spdlog::info("classifier written to {} ({:.0f} s)", summary.model, summary.seconds);
+  internal::WriteReport(common, "classifier", summary, net->config(), list.entries.size());
   return summary;
 }
 

@@ -144,10 +144,7 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
   }
   at::set_num_threads(common.threads);
   torch::manual_seed(common.seed);
-  ImageList list = common.data.Load();
-  if (common.max_images > 0 && static_cast<int>(list.entries.size()) > common.max_images) {
-    list.entries.resize(common.max_images);
-  }
+  const ImageList list = internal::LoadTrainingList(common);
   CheckCues(options, list);
   net::SegmenterNet net = BuildSegmenter(options, list, &common);
   const torch::Device device = internal::TrainingDevice();
@@ -212,18 +209,10 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
   const TrainSummary summary = internal::RunTrainingLoop(common, spec);
   AugmentOptions resize = common.augment;
   WritePreviews(net, list, options, resize);
-  nlohmann::json report = {{"kind", "segmenter"},
-                           {"model", summary.model},
-                           {"config", net::ToJson(net->config())},
-                           {"images", list.entries.size()},
-                           {"epochs", summary.epochs},
-                           {"final_loss", summary.final_loss},
-                           {"constrain_weight", options.constrain_weight},
-                           {"class_weight", options.class_weight},
-                           {"grey_probability", options.grey_probability},
-                           {"seconds_this_run", summary.seconds}};
-  std::ofstream(fs::path(common.out) / "report.json") << report.dump(2) << "\n";
-  spdlog::info("segmenter written to {} ({:.0f} s)", summary.model, summary.seconds);
+  internal::WriteReport(common, "segmenter", summary, net->config(), list.entries.size(),
+                        {{"constrain_weight", options.constrain_weight},
+                         {"class_weight", options.class_weight},
+                         {"grey_probability", options.grey_probability}});
   return summary;
 }
 

@@ -35,6 +35,29 @@ torch::Device TrainingDevice() {
   return torch::Device(torch::kCPU);
 }
 
+ImageList LoadTrainingList(const CommonTrainOptions& options) {
+  ImageList list = options.data.Load();
+  if (options.max_images > 0 && static_cast<int>(list.entries.size()) > options.max_images) {
+    list.entries.resize(options.max_images);
+  }
+  return list;
+}
+
+void WriteReport(const CommonTrainOptions& options, const std::string& kind,
+                 const TrainSummary& summary, const net::NetConfig& config, size_t images,
+                 const nlohmann::json& extra) {
+  nlohmann::json report = {{"kind", kind},
+                           {"model", summary.model},
+                           {"config", net::ToJson(config)},
+                           {"images", images},
+                           {"epochs", summary.epochs},
+                           {"final_loss", summary.final_loss},
+                           {"seconds_this_run", summary.seconds}};
+  report.update(extra);
+  std::ofstream(fs::path(options.out) / "report.json") << report.dump(2) << "\n";
+  spdlog::info("{} written to {} ({:.0f} s)", kind, summary.model, summary.seconds);
+}
+
 void MakeFolder(const std::string& folder) {
   std::error_code error;
   fs::create_directories(folder, error);

@@ -74,6 +74,15 @@ struct LoopSpec {
 // out/model.mnet. Returns the summary.
 TrainSummary RunTrainingLoop(const CommonTrainOptions& options, const LoopSpec& spec);
 
+// The training list of `options.data`, cut to options.max_images when that is set.
+ImageList LoadTrainingList(const CommonTrainOptions& options);
+
+// Writes out/report.json: the kind, model path, network configuration, data size, epochs, final
+// loss and run time, plus `extra` (the loop's own options), and logs where the model went.
+void WriteReport(const CommonTrainOptions& options, const std::string& kind,
+                 const TrainSummary& summary, const net::NetConfig& config, size_t images,
+                 const nlohmann::json& extra = nlohmann::json::object());
+
 // Creates `folder` (and parents); InputError when it cannot.
 void MakeFolder(const std::string& folder);
 
