@@ -101,6 +101,8 @@ void AddTrainCommand(CLI::App& app) {
   q->add_option("--min-coverage", cues.cues.min_coverage,
                 "fraction of a superpixel that must be seeded for it to keep a label")
       ->capture_default_str();
+  q->add_flag("!--agreed-only", cues.fuse_one_sided,
+              "fusion keeps only labels both classifiers agree on (default: also one-sided ones)");
   q->add_option("--threads", cues.threads, "libtorch intra-op threads")->capture_default_str();
   q->add_option("--max-images", cues.max_images, "first N images only (0: all)");
   q->add_option("--preview", cues.preview_images, "images rendered into OUT/preview")

@@ -178,7 +178,7 @@ cv::Mat RefineWithSuperpixels(const cv::Mat& seeds, const cv::Mat& image,
   return refined;
 }
 
-cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey) {
+cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey, bool one_sided) {
   if (colour.type() != CV_8UC1 || grey.type() != CV_8UC1 || colour.size() != grey.size()) {
     ThrowInput("FuseCues: cues must be CV_8UC1 of one size ({}x{} type {} vs {}x{} type {})",
                colour.cols, colour.rows, colour.type(), grey.cols, grey.rows, grey.type());
@@ -189,10 +189,10 @@ cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey) {
     const unsigned char* b = grey.ptr<unsigned char>(y);
     unsigned char* out = fused.ptr<unsigned char>(y);
     for (int x = 0; x < colour.cols; ++x) {
-      if (a[x] == kUnknown) {
-        out[x] = b[x];
-      } else if (b[x] == kUnknown || a[x] == b[x]) {
+      if (a[x] == b[x]) {
         out[x] = a[x];
+      } else if (a[x] == kUnknown || b[x] == kUnknown) {
+        out[x] = one_sided ? (a[x] == kUnknown ? b[x] : a[x]) : kUnknown;
       } else {
         out[x] = kUnknown;  // the two classifiers disagree
       }

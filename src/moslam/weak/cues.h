@@ -51,7 +51,8 @@ cv::Mat RefineWithSuperpixels(const cv::Mat& seeds, const cv::Mat& image,
 
 // Fusion of the colour and grey cues: where both give a label and they agree, it is kept; where
 // they disagree the pixel becomes kUnknown; where only one gives a label, it is kept.
-cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey);
+// With `one_sided` false, only labels both cues agree on are kept (higher precision, fewer seeds).
+cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey, bool one_sided = true);
 
 // Pseudo-colour rendering for inspection: each class a fixed colour, unknown black, blended over
 // the image (CV_8UC3 output of the image's size).

@@ -193,6 +193,11 @@ TEST(Cues, FusionKeepsAgreementAndOneSidedCuesAndDropsConflicts) {
   const cv::Mat expected = (cv::Mat_<uchar>(1, 5) << 1, kUnknown, 4, 2, kUnknown);
   EXPECT_EQ(cv::countNonZero(fused != expected), 0);
   EXPECT_THROW(FuseCues(colour, cv::Mat(2, 5, CV_8UC1)), InputError);
+  // Agreed labels only: the one-sided labels 4 and 2 are dropped as well.
+  const cv::Mat agreed = FuseCues(colour, grey, /*one_sided=*/false);
+  const cv::Mat expected_agreed =
+      (cv::Mat_<uchar>(1, 5) << 1, kUnknown, kUnknown, kUnknown, kUnknown);
+  EXPECT_EQ(cv::countNonZero(agreed != expected_agreed), 0);
 }
 
 TEST(Cues, OptionsCheckNamesTheField) {

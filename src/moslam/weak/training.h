@@ -73,6 +73,8 @@ struct CueGenerationOptions {
   // the image's size), out/cues.json (classes, options, statistics), out/preview/.
   std::string out;
   CueOptions cues;
+  // Fusion keeps labels only one of the two cues gives (true) or only agreed labels (false).
+  bool fuse_one_sided = true;
   int threads = 2;
   int max_images = 0;
   int preview_images = 12;
