@@ -213,7 +213,8 @@ void GenerateCues(const CueGenerationOptions& options) {
         captions.push_back(model.name + " superpixels");
       }
     }
-    const cv::Mat fused = refined.size() == 2 ? FuseCues(refined[0], refined[1], options.fuse_one_sided) : refined[0];
+    const cv::Mat fused =
+        refined.size() == 2 ? FuseCues(refined[0], refined[1], options.fuse_one_sided) : refined[0];
     const cv::Mat original = cv::imread(list.entries[i].image, cv::IMREAD_UNCHANGED);
     if (original.empty()) throw InputError("cannot read " + list.entries[i].image);
     cv::Mat cue;
