@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "moslam/io/class_list.h"
 #include "moslam/runner/model_mask_source.h"
 #include "moslam/util/error.h"
 #include "moslam/util/strings.h"
@@ -71,33 +72,6 @@ void MaskOptions::Check() const {
     ThrowInput("--crf: applies to --mask-source onnx, detector and model only");
   }
   if (dilate_px < 0) ThrowInput("--mask-dilate: must be >= 0 pixels, got {}", dilate_px);
-}
-
-std::vector<ClassInfo> ReadClasses(const std::string& path) {
-  RequireFile(path, "class list");
-  std::vector<ClassInfo> classes;
-  std::set<int> ids;
-  std::set<std::string> names;
-  for (const TextLine& line : ReadDataLines(path)) {
-    const auto fields = SplitFields(line.text);
-    const auto id = fields.size() == 3 ? ParseInt(fields[0]) : std::nullopt;
-    const auto movable = fields.size() == 3 ? ParseInt(fields[2]) : std::nullopt;
-    if (!id || !movable || (*movable != 0 && *movable != 1)) {
-      ThrowAtLine(path, line.number,
-                  "expected `<id> <name> <movable 0|1>`, got '" + line.text + "'");
-    }
-    if (*id < 0 || *id > 255) ThrowAtLine(path, line.number, "class id must be in 0..255");
-    ClassInfo info{static_cast<int>(*id), std::string(fields[1]), *movable == 1};
-    if (!ids.insert(info.id).second) {
-      ThrowAtLine(path, line.number, fmt::format("class id {} repeated", info.id));
-    }
-    if (!names.insert(info.name).second) {
-      ThrowAtLine(path, line.number, "class name '" + info.name + "' repeated");
-    }
-    classes.push_back(std::move(info));
-  }
-  if (classes.empty()) ThrowInFile(path, "lists no classes");
-  return classes;
 }
 
 std::string MaskPathFor(const std::string& folder, const io::FrameEntry& frame) {
@@ -183,18 +157,18 @@ class SynthGroundTruth : public MaskSource {
   SynthGroundTruth(const MaskOptions& options, const io::Sequence& sequence)
       : dilate_px_(options.dilate_px), lut_(1, 256, CV_8UC1, cv::Scalar(0)) {
     const std::string classes_path = ClassesPath(sequence);
-    const std::vector<ClassInfo> classes = ReadClasses(classes_path);
+    const std::vector<io::ClassInfo> classes = io::ReadClassList(classes_path);
     for (const std::string& name : options.movable) {
       const auto it = std::find_if(classes.begin(), classes.end(),
-                                   [&](const ClassInfo& c) { return c.name == name; });
+                                   [&](const io::ClassInfo& c) { return c.name == name; });
       if (it == classes.end()) {
         std::vector<std::string> known;
-        for (const ClassInfo& c : classes) known.push_back(c.name);
+        for (const io::ClassInfo& c : classes) known.push_back(c.name);
         ThrowInFile(classes_path, fmt::format("--movable: no class named '{}' (classes: {})", name,
                                               fmt::join(known, ", ")));
       }
     }
-    for (const ClassInfo& c : classes) {
+    for (const io::ClassInfo& c : classes) {
       const bool movable = options.movable.empty()
                                ? c.movable
                                : std::find(options.movable.begin(), options.movable.end(),

@@ -62,16 +62,6 @@ struct MaskOptions {
   void Check() const;
 };
 
-// One line of a synthetic sequence's classes.txt.
-struct ClassInfo {
-  int id = 0;  // 0..255, the pixel value in class/<stem>.png
-  std::string name;
-  bool movable = false;
-};
-// Reads classes.txt; InputError naming file and line for a malformed line, an id outside 0..255,
-// or a repeated id or name.
-std::vector<ClassInfo> ReadClasses(const std::string& path);
-
 struct FrameMask {
   cv::Mat mask;             // CV_8UC1, 0 / 255; empty: no mask for this frame
   double fraction = 0.0;    // share of movable pixels after dilation, 0..1

@@ -173,16 +173,6 @@ TEST(MaskSourceTest, SynthGroundTruthNeedsItsFiles) {
               HasSubstr("class/" + test::Stamp(1) + ".png: class image of frame 1"));
 }
 
-TEST(MaskSourceTest, ClassesFileErrorsNameFileAndLine) {
-  testing::TempDir dir;
-  const std::string bad_flag = dir.Write("a.txt", "0 road 0\n1 car 2\n");
-  EXPECT_THAT(ErrorOf([&] { ReadClasses(bad_flag); }), HasSubstr(bad_flag + ":2:"));
-  const std::string repeated = dir.Write("b.txt", "1 car 1\n1 bus 1\n");
-  EXPECT_THAT(ErrorOf([&] { ReadClasses(repeated); }), HasSubstr("class id 1 repeated"));
-  const std::string range = dir.Write("c.txt", "256 car 1\n");
-  EXPECT_THAT(ErrorOf([&] { ReadClasses(range); }), HasSubstr("0..255"));
-}
-
 TEST(MaskSourceTest, OptionsAreChecked) {
   MaskOptions options;
   options.dilate_px = -1;

@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "moslam/io/class_list.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
 #include "moslam/util/strings.h"
@@ -83,34 +84,22 @@ int ImageList::ClassIndex(const std::string& name) const {
 }
 
 ImageList ReadClassesFile(const std::string& path) {
-  RequireFile(path, "classes file");
   ImageList list;
   int expected_id = 0;
-  for (const TextLine& line : ReadDataLines(path)) {
-    const auto fields = SplitFields(line.text);
-    const auto id = fields.size() == 3 ? ParseInt(fields[0]) : std::nullopt;
-    const auto movable = fields.size() == 3 ? ParseInt(fields[2]) : std::nullopt;
-    if (!id || !movable || (*movable != 0 && *movable != 1)) {
-      ThrowAtLine(path, line.number,
-                  "expected `<id> <name> <movable 0|1>`, got '" + line.text + "'");
-    }
-    if (*id != expected_id) {
-      ThrowAtLine(path, line.number,
+  for (const io::ClassInfo& info : io::ReadClassList(path)) {
+    if (info.id != expected_id) {
+      ThrowAtLine(path, info.line,
                   fmt::format("class ids must be 0, 1, 2, ... in order; expected {}, got {}",
-                              expected_id, *id));
+                              expected_id, info.id));
     }
     ++expected_id;
-    const std::string name(fields[1]);
-    if (list.ClassIndex(name) >= 0 || (!list.background.empty() && name == list.background)) {
-      ThrowAtLine(path, line.number, "class name '" + name + "' repeated");
-    }
-    if (name == kBackgroundName) {
+    if (info.name == kBackgroundName) {
       // "None of the others": a segmentation label, never an image-level one.
-      list.background = name;
+      list.background = info.name;
       continue;
     }
-    list.class_names.push_back(name);
-    list.movable.push_back(*movable == 1);
+    list.class_names.push_back(info.name);
+    list.movable.push_back(info.movable);
   }
   if (list.class_names.empty()) ThrowInFile(path, "lists no classes (other than background)");
   return list;
