@@ -46,6 +46,7 @@ struct RunArgs {
   bool monocular = false;
   bool quiet = false;
   bool no_loop_closing = false;
+  int mapping_nice = 10;
 };
 
 // The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
@@ -92,6 +93,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.deterministic = args.deterministic;
   options.vocabulary_path = ResolveVocabulary(args.vocabulary);
   options.loop_closing = !args.no_loop_closing;
+  options.background_nice = args.mapping_nice;
   options.Check();
   return std::make_unique<SystemTracker>(options);
 #else
@@ -265,6 +267,13 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--quiet", args->quiet, "No progress line and only warnings in the log");
   command->add_flag("--no-loop-closing", args->no_loop_closing,
                     "Run without loop closing even with a vocabulary (to measure what it does)");
+  command
+      ->add_option("--mapping-nice", args->mapping_nice,
+                   "Nice increment (0-19) of the local-mapping and loop-closing threads, so "
+                   "that tracking and segmentation get the cores first (0: equal priority, "
+                   "as ORB-SLAM2; no effect with --deterministic)")
+      ->check(CLI::Range(0, 19))
+      ->capture_default_str();
   command->callback([args] {
     if (args->quiet) spdlog::set_level(std::max(spdlog::get_level(), spdlog::level::warn));
     Run(*args);

@@ -27,6 +27,7 @@
 #include "moslam/slam/tracker.h"
 #include "moslam/util/bounded_queue.h"
 #include "moslam/util/error.h"
+#include "moslam/util/thread_priority.h"
 #include "moslam/vocab/vocabulary.h"
 
 namespace moslam::slam {
@@ -51,6 +52,10 @@ void SystemOptions::Check() const {
   }
   if (keyframe_queue_capacity < 1) {
     throw InputError("SystemOptions.keyframe_queue_capacity must be >= 1");
+  }
+  if (background_nice < 0 || background_nice > 19) {
+    throw InputError("SystemOptions.background_nice must be in 0..19 (got " +
+                     std::to_string(background_nice) + ")");
   }
   settings.Check(sensor);
 }
@@ -292,7 +297,14 @@ class System::Impl : public KeyFrameSink {
                                   camera_, options_.settings.bf);
   }
 
+  void LowerPriority(const char* what) const {
+    if (!util::LowerCurrentThreadPriority(options_.background_nice)) {
+      spdlog::warn("{} thread: could not lower its priority by {}", what, options_.background_nice);
+    }
+  }
+
   void MappingLoop() {
+    LowerPriority("local mapping");
     while (auto keyframe = queue_.Pop()) {
       mapping_busy_ = true;
       mapper_.ProcessKeyFrame(*keyframe, [this] { return queue_.size() > 0; });
@@ -304,6 +316,7 @@ class System::Impl : public KeyFrameSink {
   }
 
   void LoopClosingLoop() {
+    LowerPriority("loop closing");
     while (auto keyframe = loop_queue_.Pop()) loop_closer_->ProcessKeyFrame(*keyframe);
   }
 

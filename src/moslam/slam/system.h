@@ -33,6 +33,12 @@ struct SystemOptions {
   // Mapping synchronously after each keyframe, fixed seeds, one thread everywhere.
   bool deterministic = false;
   int keyframe_queue_capacity = 8;  // bounded queue tracking -> local mapping (keyframes)
+  // Nice increment (0-19) of the local-mapping and loop-closing threads (and the global bundle
+  // adjustments they start). Local mapping keeps a core busy refining the map whenever it can;
+  // on a 2-core machine that also runs a segmentation network it would take its share from
+  // tracking and segmentation, which set the frame rate. Lowered, it uses what they leave. 0
+  // keeps every thread at the process's priority (ORB-SLAM2's behaviour). Linux only.
+  int background_nice = 0;
   // Local bundle adjustment after each keyframe (LocalMapperOptions::local_bundle_adjustment);
   // off only for experiments that measure what it contributes.
   bool local_bundle_adjustment = true;
