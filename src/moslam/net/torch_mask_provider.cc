@@ -116,7 +116,7 @@ TorchMaskProvider::TorchMaskProvider(const semantic::ModelCard& card,
 
 TorchMaskProvider::~TorchMaskProvider() = default;
 
-semantic::MaskResult TorchMaskProvider::Segment(const semantic::MaskInput& input) {
+semantic::Prediction TorchMaskProvider::Predict(const semantic::MaskInput& input) {
   const auto start = Clock::now();
   if (input.image.empty()) ThrowInput("{}: no image to segment", card_.name);
   // TorchSegmenter takes grey or BGR; ToBgr drops an alpha channel and rejects other types.
@@ -134,18 +134,16 @@ semantic::MaskResult TorchMaskProvider::Segment(const semantic::MaskInput& input
   cv::Mat probabilities = semantic::ResizePlanar(
       out.probabilities, semantic::WorkingSize(input.image.size(), refiner_.options().working_side),
       cv::INTER_LINEAR);
-  semantic::MaskResult result;
-  result.network_ms = MsSince(start);
-  semantic::RefineResult refined =
-      refiner_.Refine(std::move(probabilities), input.image, input.depth, out.class_scores);
-  result.mask = std::move(refined.mask);
-  result.probabilities = std::move(refined.probabilities);
-  result.labels = std::move(refined.labels);
-  result.image_scores = std::move(refined.image_scores);
-  result.suppressed = std::move(refined.suppressed);
-  result.crf_ms = refined.crf_ms;
-  result.total_ms = MsSince(start);
-  return result;
+  semantic::Prediction prediction;
+  prediction.probabilities = std::move(probabilities);
+  prediction.image_scores = std::move(out.class_scores);
+  prediction.network_ms = MsSince(start);
+  return prediction;
+}
+
+semantic::MaskResult TorchMaskProvider::Refine(semantic::Prediction prediction,
+                                               const semantic::MaskInput& input) {
+  return semantic::RefinePrediction(refiner_, std::move(prediction), input);
 }
 
 std::string TorchMaskProvider::Describe() const {

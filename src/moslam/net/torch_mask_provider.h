@@ -48,7 +48,9 @@ class TorchMaskProvider : public semantic::MaskProvider {
   ~TorchMaskProvider() override;
 
   // MaskResult::image_scores are the network's image-level class scores (what suppression read).
-  semantic::MaskResult Segment(const semantic::MaskInput& input) override;
+  semantic::Prediction Predict(const semantic::MaskInput& input) override;
+  semantic::MaskResult Refine(semantic::Prediction prediction,
+                              const semantic::MaskInput& input) override;
   const std::vector<std::string>& class_names() const override { return card_.classes; }
   const std::vector<bool>& movable() const override { return movable_; }
   std::string Describe() const override;

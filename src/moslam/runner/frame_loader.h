@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <exception>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -22,6 +23,8 @@
 
 namespace moslam::runner {
 
+struct FrameMask;  // runner/mask_source.h
+
 struct LoadedFrame {
   int index = 0;                          // FrameEntry::index
   const io::FrameEntry* entry = nullptr;  // the sequence's entry (it outlives the run)
@@ -31,6 +34,8 @@ struct LoadedFrame {
   double network_ms = 0.0;     // of mask_ms: the network (pre-processing and inference)
   double crf_ms = 0.0;         // of mask_ms: the CRF
   double mask_fraction = 0.0;  // share of movable pixels, 0 when there is no mask
+  // Between the two segmentation threads of a pipelined mask source: the network's output.
+  std::shared_ptr<FrameMask> pending_mask;
 };
 
 // Loads one frame; throws InputError naming the file on failure. Called in the loader thread.

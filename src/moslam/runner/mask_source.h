@@ -31,6 +31,10 @@
 #include "moslam/io/sequence.h"
 #include "moslam/semantic/mask_refine.h"
 
+namespace moslam::semantic {
+struct Prediction;  // semantic/mask_provider.h
+}  // namespace moslam::semantic
+
 namespace moslam::runner {
 
 enum class MaskSourceKind { kNone, kFiles, kSynthGt, kOnnx, kDetector, kModel };
@@ -68,6 +72,8 @@ struct FrameMask {
   std::string path;         // the file it came from; empty when none
   double network_ms = 0.0;  // model sources: pre-processing and inference
   double crf_ms = 0.0;      // model sources: the CRF
+  // Pipelined model sources: the network's output between Predict() and Refine() (mask empty).
+  std::shared_ptr<semantic::Prediction> pending;
 };
 
 class MaskSource {
@@ -83,6 +89,20 @@ class MaskSource {
                             const cv::Mat& depth) {
     (void)depth;
     return MaskFor(frame, image.size());
+  }
+  // Two steps for two threads, so that the network of frame k+1 runs while the CRF refines frame
+  // k: Predict() then Refine() give what Segment() gives. Sources that say Pipelined() (networks)
+  // leave FrameMask::pending to Refine(); the others do everything in Predict(). Each step is
+  // called by one thread at a time.
+  virtual bool Pipelined() const { return false; }
+  virtual FrameMask Predict(const io::FrameEntry& frame, const cv::Mat& image,
+                            const cv::Mat& depth) {
+    return Segment(frame, image, depth);
+  }
+  virtual void Refine(FrameMask* mask, const cv::Mat& image, const cv::Mat& depth) {
+    (void)mask;
+    (void)image;
+    (void)depth;
   }
   // For logs and summary.json, e.g. "synth-gt (movable: person, car)".
   virtual std::string Describe() const = 0;

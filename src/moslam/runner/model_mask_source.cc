@@ -23,7 +23,25 @@ class ProviderMaskSource : public MaskSource {
                frame.index);
   }
   FrameMask Segment(const io::FrameEntry&, const cv::Mat& image, const cv::Mat& depth) override {
-    semantic::MaskResult result = provider_->Segment({image, depth});
+    return ToFrameMask(provider_->Segment({image, depth}));
+  }
+  bool Pipelined() const override { return true; }
+  FrameMask Predict(const io::FrameEntry&, const cv::Mat& image, const cv::Mat& depth) override {
+    FrameMask mask;
+    mask.pending = std::make_shared<semantic::Prediction>(provider_->Predict({image, depth}));
+    mask.network_ms = mask.pending->network_ms;
+    return mask;
+  }
+  void Refine(FrameMask* mask, const cv::Mat& image, const cv::Mat& depth) override {
+    MOSLAM_CHECK(mask->pending != nullptr) << "Refine() without Predict()";
+    semantic::Prediction prediction = std::move(*mask->pending);
+    mask->pending.reset();
+    *mask = ToFrameMask(provider_->Refine(std::move(prediction), {image, depth}));
+  }
+  std::string Describe() const override { return provider_->Describe(); }
+
+ private:
+  static FrameMask ToFrameMask(semantic::MaskResult result) {
     FrameMask mask;
     mask.fraction = static_cast<double>(cv::countNonZero(result.mask)) /
                     static_cast<double>(result.mask.total());
@@ -32,9 +50,7 @@ class ProviderMaskSource : public MaskSource {
     mask.crf_ms = result.crf_ms;
     return mask;
   }
-  std::string Describe() const override { return provider_->Describe(); }
 
- private:
   std::unique_ptr<semantic::MaskProvider> provider_;
 };
 

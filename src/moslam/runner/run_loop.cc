@@ -1,6 +1,8 @@
 #include "moslam/runner/run_loop.h"
 
 #include <chrono>
+#include <memory>
+#include <optional>
 #include <thread>
 
 #include <fmt/format.h>
@@ -88,6 +90,29 @@ void SegmentFrame(MaskSource& masks, LoadedFrame* frame) {
   frame->input.mask = std::move(mask.mask);
 }
 
+void PredictFrame(MaskSource& masks, LoadedFrame* frame) {
+  MOSLAM_CHECK(frame->entry != nullptr) << "a loaded frame without its sequence entry";
+  const auto start = Clock::now();
+  auto mask = std::make_shared<FrameMask>(
+      masks.Predict(*frame->entry, frame->input.image, frame->input.depth));
+  frame->mask_ms = MsSince(start);
+  frame->network_ms = mask->network_ms;
+  frame->pending_mask = std::move(mask);
+}
+
+void RefineFrame(MaskSource& masks, LoadedFrame* frame) {
+  MOSLAM_CHECK(frame->pending_mask != nullptr) << "RefineFrame() before PredictFrame()";
+  const auto start = Clock::now();
+  FrameMask& mask = *frame->pending_mask;
+  masks.Refine(&mask, frame->input.image, frame->input.depth);
+  frame->mask_ms += MsSince(start);
+  frame->network_ms = mask.network_ms;
+  frame->crf_ms = mask.crf_ms;
+  frame->mask_fraction = mask.fraction;
+  frame->input.mask = std::move(mask.mask);
+  frame->pending_mask.reset();
+}
+
 LoadedFrame LoadFrame(const io::FrameEntry& frame, MaskSource& masks, const RunOptions& options) {
   LoadedFrame loaded = LoadImages(frame, options);
   SegmentFrame(masks, &loaded);
@@ -121,8 +146,19 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource
         sequence, result.first, result.last,
         [&options](const io::FrameEntry& f) { return LoadImages(f, options); },
         options.queue_capacity);
-    SegmentationStage stage([&loader] { return loader.Next(); }, [&loader] { loader.Stop(); },
-                            [&masks](LoadedFrame& f) { SegmentFrame(masks, &f); },
+    // A network source gets two stages, network then refinement (the CRF), so that on two
+    // cores the CRF of frame k runs beside the network of frame k+1.
+    std::optional<SegmentationStage> network_stage;
+    if (masks.Pipelined()) {
+      network_stage.emplace([&loader] { return loader.Next(); }, [&loader] { loader.Stop(); },
+                            [&masks](LoadedFrame& f) { PredictFrame(masks, &f); },
+                            options.queue_capacity);
+    }
+    SegmentationStage stage([&] { return network_stage ? network_stage->Next() : loader.Next(); },
+                            [&] { network_stage ? network_stage->Stop() : loader.Stop(); },
+                            [&masks, pipelined = masks.Pipelined()](LoadedFrame& f) {
+                              pipelined ? RefineFrame(masks, &f) : SegmentFrame(masks, &f);
+                            },
                             options.queue_capacity);
     const double first_stamp = sequence.frames[result.first].timestamp;
     while (std::optional<LoadedFrame> frame = stage.Next()) {

@@ -68,6 +68,11 @@ struct RunResult {
 LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options);
 // Sets frame->input.mask and the mask timings from `masks` (the segmentation thread's part).
 void SegmentFrame(MaskSource& masks, LoadedFrame* frame);
+// The same in two steps for a pipelined source (MaskSource::Pipelined): the network's thread
+// runs PredictFrame (frame->pending_mask), the refinement thread RefineFrame (the mask); the
+// times add up as SegmentFrame's.
+void PredictFrame(MaskSource& masks, LoadedFrame* frame);
+void RefineFrame(MaskSource& masks, LoadedFrame* frame);
 // Both, in the caller's thread.
 LoadedFrame LoadFrame(const io::FrameEntry& frame, MaskSource& masks, const RunOptions& options);
 

@@ -16,6 +16,7 @@
 #include "moslam/runner/model_mask_source.h"
 #include "moslam/runner/run_loop.h"
 #include "moslam/runner/test_sequences.h"
+#include "moslam/semantic/dense_crf.h"
 #include "moslam/testing/error_of.h"
 
 namespace moslam::runner {
@@ -141,18 +142,31 @@ TEST(SegmentationStage, NextFrameIsSegmentedWhileTheCurrentOneIsTracked) {
       segmented.wait_for(lock, std::chrono::minutes(1), [&] { return last_segmented >= 1; }));
 }
 
-// A mask source over a fake provider: Segment() is what the run loop calls, with the frame's
-// image; the network and CRF times reach the frame records.
+// A mask source over a fake provider, pipelined: Predict() (the network's thread) gives
+// probabilities, Refine() (the refinement thread) the mask; the network and CRF times reach the
+// frame records. `fail_predict_at` / `fail_refine_at`: the call that throws (-1: none).
 class FakeProvider : public semantic::MaskProvider {
  public:
-  explicit FakeProvider(int fail_at) : fail_at_(fail_at) {}
-  semantic::MaskResult Segment(const semantic::MaskInput& input) override {
-    if (calls_++ == fail_at_) ThrowInput("fake network: out of memory");
+  explicit FakeProvider(int fail_predict_at, int fail_refine_at = -1)
+      : fail_predict_at_(fail_predict_at), fail_refine_at_(fail_refine_at) {}
+  semantic::Prediction Predict(const semantic::MaskInput& input) override {
+    if (predictions_++ == fail_predict_at_) ThrowInput("fake network: out of memory");
+    // Movable where the image is brighter than 42 (TUM test frames are 40 + i).
+    const int sizes[] = {2, input.image.rows, input.image.cols};
+    semantic::Prediction prediction;
+    prediction.probabilities = cv::Mat(3, sizes, CV_32F, cv::Scalar(0.0f));
+    semantic::LabelPlane(prediction.probabilities, 1).setTo(1.0f, input.image > 42);
+    semantic::LabelPlane(prediction.probabilities, 0).setTo(1.0f, input.image <= 42);
+    prediction.network_ms = 7.0;
+    return prediction;
+  }
+  semantic::MaskResult Refine(semantic::Prediction prediction,
+                              const semantic::MaskInput& input) override {
+    if (refinements_++ == fail_refine_at_) ThrowInput("fake CRF: bad depth");
     semantic::MaskResult result;
     result.mask = cv::Mat(input.image.size(), CV_8UC1, cv::Scalar(0));
-    // Movable where the image is brighter than 42 (TUM test frames are 40 + i).
-    result.mask.setTo(255, input.image > 42);
-    result.network_ms = 7.0;
+    result.mask.setTo(255, semantic::LabelPlane(prediction.probabilities, 1) > 0.5f);
+    result.network_ms = prediction.network_ms;
     result.crf_ms = 3.0;
     return result;
   }
@@ -161,8 +175,10 @@ class FakeProvider : public semantic::MaskProvider {
   std::string Describe() const override { return "fake"; }
 
  private:
-  int fail_at_;
-  int calls_ = 0;
+  int fail_predict_at_;
+  int fail_refine_at_;
+  std::atomic<int> predictions_{0};
+  std::atomic<int> refinements_{0};
   std::vector<std::string> names_ = {"static", "thing"};
   std::vector<bool> movable_ = {false, true};
 };
@@ -201,6 +217,41 @@ TEST(SegmentationStage, RunSequenceStopsCleanlyWhenTheProviderFails) {
   EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, Quiet()); }),
               HasSubstr("out of memory"));
   EXPECT_EQ(tracker.masks.size(), 2u);  // frames 0 and 1 were tracked, nothing after the error
+}
+
+TEST(SegmentationStage, RunSequenceStopsCleanlyWhenTheRefinementFails) {
+  testing::TempDir data;
+  test::MakeTum(data, 40);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  test::FakeTracker tracker;
+  const auto masks = MakeProviderMaskSource(std::make_unique<FakeProvider>(-1, 3));
+  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, Quiet()); }), HasSubstr("bad depth"));
+  EXPECT_EQ(tracker.masks.size(), 3u);  // frames 0 to 2 were tracked, nothing after the error
+}
+
+TEST(SegmentationStage, PipelinedStepsGiveWhatSegmentGives) {
+  testing::TempDir data;
+  test::MakeTum(data, 4);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  const auto pipelined = MakeProviderMaskSource(std::make_unique<FakeProvider>(-1));
+  const auto whole = MakeProviderMaskSource(std::make_unique<FakeProvider>(-1));
+  ASSERT_TRUE(pipelined->Pipelined());
+  RunOptions options = Quiet();
+  for (const io::FrameEntry& entry : seq.frames) {
+    LoadedFrame a = LoadImages(entry, options);
+    LoadedFrame b = LoadImages(entry, options);
+    PredictFrame(*pipelined, &a);
+    ASSERT_NE(a.pending_mask, nullptr);
+    EXPECT_TRUE(a.input.mask.empty());  // no mask before refinement
+    RefineFrame(*pipelined, &a);
+    SegmentFrame(*whole, &b);
+    EXPECT_EQ(a.pending_mask, nullptr);
+    ASSERT_EQ(a.input.mask.size(), b.input.mask.size());
+    EXPECT_EQ(cv::countNonZero(a.input.mask != b.input.mask), 0) << entry.index;
+    EXPECT_EQ(a.network_ms, 7.0);
+    EXPECT_EQ(a.crf_ms, 3.0);
+    EXPECT_DOUBLE_EQ(a.mask_fraction, b.mask_fraction);
+  }
 }
 
 }  // namespace

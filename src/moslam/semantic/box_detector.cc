@@ -10,7 +10,6 @@
 namespace moslam::semantic {
 
 using internal::Clock;
-using internal::CopyRefined;
 using internal::MsSince;
 using internal::ReadNet;
 using internal::RefineText;
@@ -83,14 +82,14 @@ cv::Mat BoxDetector::BoxProbabilities(const std::vector<Detection>& detections,
   return planes;
 }
 
-MaskResult BoxDetector::Segment(const MaskInput& input) {
+Prediction BoxDetector::Predict(const MaskInput& input) {
   const auto start = Clock::now();
   const cv::Mat bgr = ToBgr(input.image);
   std::vector<int> ids;
   std::vector<float> confidences;
   std::vector<cv::Rect> boxes;
   model_.detect(bgr, ids, confidences, boxes, card_.confidence, card_.nms);
-  MaskResult result;
+  Prediction result;
   const cv::Rect bounds(0, 0, bgr.cols, bgr.rows);
   for (size_t i = 0; i < ids.size(); ++i) {
     if (ids[i] < 0 || ids[i] >= static_cast<int>(card_.classes.size())) {
@@ -101,13 +100,15 @@ MaskResult BoxDetector::Segment(const MaskInput& input) {
     const cv::Rect box = boxes[i] & bounds;
     if (!box.empty()) result.detections.push_back({ids[i], confidences[i], box});
   }
-  cv::Mat probabilities = BoxProbabilities(
+  result.probabilities = BoxProbabilities(
       result.detections, plane_of_, static_cast<int>(names_.size()), card_.box_probability,
       bgr.size(), WorkingSize(bgr.size(), refiner_.options().working_side));
   result.network_ms = MsSince(start);
-  CopyRefined(refiner_.Refine(std::move(probabilities), input.image, input.depth), &result);
-  result.total_ms = MsSince(start);
   return result;
+}
+
+MaskResult BoxDetector::Refine(Prediction prediction, const MaskInput& input) {
+  return RefinePrediction(refiner_, std::move(prediction), input);
 }
 
 std::string BoxDetector::Describe() const {

@@ -22,7 +22,8 @@ class BoxDetector : public MaskProvider {
  public:
   // InputError naming the model or config file when OpenCV cannot load them.
   BoxDetector(const ModelCard& card, const RefineOptions& refine);
-  MaskResult Segment(const MaskInput& input) override;
+  Prediction Predict(const MaskInput& input) override;
+  MaskResult Refine(Prediction prediction, const MaskInput& input) override;
   const std::vector<std::string>& class_names() const override { return names_; }
   const std::vector<bool>& movable() const override { return movable_; }
   std::string Describe() const override;

@@ -39,13 +39,4 @@ inline std::string RefineText(const RefineOptions& refine) {
   return text;
 }
 
-inline void CopyRefined(RefineResult&& refined, MaskResult* result) {
-  result->mask = std::move(refined.mask);
-  result->probabilities = std::move(refined.probabilities);
-  result->labels = std::move(refined.labels);
-  result->image_scores = std::move(refined.image_scores);
-  result->suppressed = std::move(refined.suppressed);
-  result->crf_ms = refined.crf_ms;
-}
-
 }  // namespace moslam::semantic::internal

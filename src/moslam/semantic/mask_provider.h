@@ -3,8 +3,11 @@
 // runner/, masks read from files and the synthetic generator's ground truth (adapted in
 // runner/mask_source.h, since they need the frame's file names rather than its pixels).
 //
-// A provider is used by one thread at a time (the segmentation stage of `moslam run`, or
-// `moslam segment`); Segment() keeps buffers and the network between frames and is not const.
+// Work comes in two steps, so that a pipeline can run the network on frame k+1 while the CRF
+// refines frame k: Predict() (pre-processing, the network, class probabilities at the working
+// size) and Refine() (test-time suppression, CRF, upsampling, dilation; semantic/mask_refine.h).
+// Segment() is both, timed. Predict() and Refine() may be called from two different threads, one
+// thread each (the network and the refiner share no state); each keeps its buffers between frames.
 #pragma once
 
 #include <memory>
@@ -44,17 +47,35 @@ struct MaskResult {
   double total_ms = 0.0;    // the whole Segment() call
 };
 
+// What the network made of a frame, before refinement.
+struct Prediction {
+  cv::Mat probabilities;              // {L, h, w} CV_32F at the working size, summing to 1
+  std::vector<float> image_scores;    // per class, for suppression; empty: each plane's maximum
+  std::vector<Detection> detections;  // detectors only: the kept boxes of every class
+  double network_ms = 0.0;            // pre-processing, inference, probabilities
+};
+
 class MaskProvider {
  public:
   virtual ~MaskProvider() = default;
-  // InputError for an image of the wrong type, or a network output that does not match the card.
-  virtual MaskResult Segment(const MaskInput& input) = 0;
+  // The network's part. InputError for an image of the wrong type, or a network output that does
+  // not match the card.
+  virtual Prediction Predict(const MaskInput& input) = 0;
+  // The refinement of `prediction`, made by Predict(input) (the same frame). InputError when the
+  // depth kernel needs a depth map that `input` lacks.
+  virtual MaskResult Refine(Prediction prediction, const MaskInput& input) = 0;
+  // Predict, then Refine, with total_ms.
+  MaskResult Segment(const MaskInput& input);
   // The classes of MaskResult::probabilities, and which are movable.
   virtual const std::vector<std::string>& class_names() const = 0;
   virtual const std::vector<bool>& movable() const = 0;
   // For logs and summary.json, e.g. "onnx deeplabv3_mnv2_voc (movable: person, car), crf c".
   virtual std::string Describe() const = 0;
 };
+
+// MaskProvider::Refine of the network providers: `refiner` on the prediction's probabilities and
+// image scores; the detections and network time are carried over.
+MaskResult RefinePrediction(MaskRefiner& refiner, Prediction&& prediction, const MaskInput& input);
 
 // The provider a card describes (ONNX segmentation or detector), with `refine` as its
 // post-processing (usually card.refine with the command line's --crf and --mask-dilate).

@@ -8,7 +8,6 @@
 namespace moslam::semantic {
 
 using internal::Clock;
-using internal::CopyRefined;
 using internal::MsSince;
 using internal::ReadNet;
 using internal::RefineText;
@@ -19,7 +18,7 @@ OnnxSegmenter::OnnxSegmenter(const ModelCard& card, const RefineOptions& refine)
       refiner_(refine, movable_, card.BackgroundIndex()),
       net_(ReadNet(card)) {}
 
-MaskResult OnnxSegmenter::Segment(const MaskInput& input) {
+Prediction OnnxSegmenter::Predict(const MaskInput& input) {
   const auto start = Clock::now();
   const cv::Mat bgr = ToBgr(input.image);
   const cv::Mat blob = cv::dnn::blobFromImage(
@@ -39,11 +38,14 @@ MaskResult OnnxSegmenter::Segment(const MaskInput& input) {
   cv::Mat probabilities = ResizePlanar(
       logits, WorkingSize(input.image.size(), refiner_.options().working_side), cv::INTER_LINEAR);
   SoftmaxPlanar(&probabilities);
-  MaskResult result;
-  result.network_ms = MsSince(start);
-  CopyRefined(refiner_.Refine(std::move(probabilities), input.image, input.depth), &result);
-  result.total_ms = MsSince(start);
-  return result;
+  Prediction prediction;
+  prediction.probabilities = std::move(probabilities);
+  prediction.network_ms = MsSince(start);
+  return prediction;
+}
+
+MaskResult OnnxSegmenter::Refine(Prediction prediction, const MaskInput& input) {
+  return RefinePrediction(refiner_, std::move(prediction), input);
 }
 
 std::string OnnxSegmenter::Describe() const {

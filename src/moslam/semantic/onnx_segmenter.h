@@ -19,7 +19,8 @@ class OnnxSegmenter : public MaskProvider {
  public:
   // InputError naming the model file when OpenCV cannot load it.
   OnnxSegmenter(const ModelCard& card, const RefineOptions& refine);
-  MaskResult Segment(const MaskInput& input) override;
+  Prediction Predict(const MaskInput& input) override;
+  MaskResult Refine(Prediction prediction, const MaskInput& input) override;
   const std::vector<std::string>& class_names() const override { return card_.classes; }
   const std::vector<bool>& movable() const override { return movable_; }
   std::string Describe() const override;
