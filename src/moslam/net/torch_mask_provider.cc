@@ -160,7 +160,7 @@ std::string TorchMaskProvider::Describe() const {
 std::unique_ptr<semantic::MaskProvider> MakeAnyMaskProvider(const semantic::ModelCard& card,
                                                             const semantic::RefineOptions& refine) {
   if (card.kind == semantic::ModelKind::kTorch) {
-    return std::make_unique<TorchMaskProvider>(card, refine);
+    return std::make_unique<TorchMaskProvider>(card, refine, card.threads);
   }
   return semantic::MakeMaskProvider(card, refine);
 }

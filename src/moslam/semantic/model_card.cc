@@ -91,6 +91,7 @@ void ModelCard::Check() const {
   }
   if (!(confidence > 0.0f && confidence < 1.0f)) ThrowInFile(path, "confidence: must be in (0, 1)");
   if (!(nms > 0.0f && nms <= 1.0f)) ThrowInFile(path, "nms: must be in (0, 1]");
+  if (threads < 1 || threads > 64) ThrowInFile(path, "threads: must be in 1..64");
   if (!(box_probability > 0.5f && box_probability < 1.0f)) {
     // Above one half so that a box's class wins the argmax inside the box without the CRF.
     ThrowInFile(path, "box_probability: must be in (0.5, 1)");
@@ -159,6 +160,7 @@ ModelCard LoadModelCard(const std::string& path, const std::string& shared_root)
   file.Read("confidence", &card.confidence);
   file.Read("nms", &card.nms);
   file.Read("box_probability", &card.box_probability);
+  file.Read("threads", &card.threads);
   ReadRefineOptions(file, "refine.", &card.refine);
   file.RejectUnread();
   card.Check();

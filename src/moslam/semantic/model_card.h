@@ -19,6 +19,7 @@
 //   confidence: 0.25            # detector: minimum box confidence
 //   nms: 0.45                   # detector: non-maximum suppression IoU
 //   box_probability: 0.9        # detector: probability given to a box's class inside the box
+//   threads: 2                  # torch: libtorch's intra-op threads (the CRF has crf.num_threads)
 //   refine: {working_side: 320, suppress_below: 0.0, crf_binary: true, dilate_px: 0}
 //   crf: {...}                  # DenseCrfOptions fields (dense_crf.h)
 //
@@ -58,6 +59,10 @@ struct ModelCard {
   float confidence = 0.25f;
   float nms = 0.45f;
   float box_probability = 0.9f;
+  // torch cards: libtorch's intra-op threads (at::set_num_threads, one pool per process). In
+  // `moslam run` the network shares 2 cores with the CRF, tracking and mapping threads, where 1
+  // can beat 2; alone (`moslam segment`, seg-eval) 2 is faster.
+  int threads = 2;
   RefineOptions refine;
 
   // InputError naming the card and the key of the first bad value (e.g. a movable class that is

@@ -80,6 +80,7 @@ TEST(ModelCard, ErrorsNameTheKeyAndTheCard) {
   bad_type.replace(bad_type.find("segmentation"), 12, "classifier");
   EXPECT_THAT(load(bad_type), HasSubstr("type"));
   EXPECT_THAT(load(std::string(kCard) + "nms: 2\n"), HasSubstr("nms"));
+  EXPECT_THAT(load(std::string(kCard) + "threads: 0\n"), HasSubstr("threads"));
 }
 
 TEST(ModelCard, SetMovableReplacesTheMovableClasses) {
@@ -103,6 +104,12 @@ TEST(ModelCard, TorchCardsTakeSizeAndClassesFromTheModelFile) {
   EXPECT_TRUE(card.classes.empty());
   EXPECT_TRUE(card.movable.empty());
   EXPECT_DOUBLE_EQ(card.scale, 1.0 / 127.5);  // what the networks take: RGB in [-1, 1]
+  EXPECT_EQ(card.threads, 2);
+  EXPECT_EQ(
+      LoadModelCard(dir.Write("one.yaml", "%YAML:1.0\ntype: torch\nmodel: net.mnet\nthreads: 1\n"),
+                    "/none")
+          .threads,
+      1);
   // Given classes are still checked as in any card.
   EXPECT_THAT(ErrorOf([&] {
                 LoadModelCard(dir.Write("bad.yaml",
