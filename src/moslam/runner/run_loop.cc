@@ -79,17 +79,6 @@ LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options) {
   return loaded;
 }
 
-void SegmentFrame(MaskSource& masks, LoadedFrame* frame) {
-  MOSLAM_CHECK(frame->entry != nullptr) << "a loaded frame without its sequence entry";
-  const auto start = Clock::now();
-  FrameMask mask = masks.Segment(*frame->entry, frame->input.image, frame->input.depth);
-  frame->mask_ms = MsSince(start);
-  frame->network_ms = mask.network_ms;
-  frame->crf_ms = mask.crf_ms;
-  frame->mask_fraction = mask.fraction;
-  frame->input.mask = std::move(mask.mask);
-}
-
 void PredictFrame(MaskSource& masks, LoadedFrame* frame) {
   MOSLAM_CHECK(frame->entry != nullptr) << "a loaded frame without its sequence entry";
   const auto start = Clock::now();
@@ -111,6 +100,13 @@ void RefineFrame(MaskSource& masks, LoadedFrame* frame) {
   frame->mask_fraction = mask.fraction;
   frame->input.mask = std::move(mask.mask);
   frame->pending_mask.reset();
+}
+
+// Predict() then Refine() is Segment() for every source (MaskSource's defaults for the file
+// sources), so one thread can run both steps.
+void SegmentFrame(MaskSource& masks, LoadedFrame* frame) {
+  PredictFrame(masks, frame);
+  RefineFrame(masks, frame);
 }
 
 LoadedFrame LoadFrame(const io::FrameEntry& frame, MaskSource& masks, const RunOptions& options) {
