@@ -12,18 +12,16 @@
 #include <cstddef>
 #include <exception>
 #include <functional>
-#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
 
 #include "moslam/io/sequence.h"
+#include "moslam/runner/mask_source.h"
 #include "moslam/slam/system.h"
 #include "moslam/util/bounded_queue.h"
 
 namespace moslam::runner {
-
-struct FrameMask;  // runner/mask_source.h
 
 struct LoadedFrame {
   int index = 0;                          // FrameEntry::index
@@ -35,7 +33,7 @@ struct LoadedFrame {
   double crf_ms = 0.0;         // of mask_ms: the CRF
   double mask_fraction = 0.0;  // share of movable pixels, 0 when there is no mask
   // Between the two segmentation threads of a pipelined mask source: the network's output.
-  std::shared_ptr<FrameMask> pending_mask;
+  std::optional<FrameMask> pending_mask;
 };
 
 // Loads one frame; throws InputError naming the file on failure. Called in the loader thread.

@@ -17,8 +17,9 @@
 //             0|1>`. The mask is the pixels whose class is movable: the classes named in `movable`,
 //             or, when that is empty, those marked 1 in classes.txt.
 //
-// Masks are computed in the segmentation stage's thread (segmentation_stage.h), one frame at a
-// time, through Segment(). The file-based sources' MaskFor is const and safe from any thread.
+// Masks are computed in the segmentation stage's threads (segmentation_stage.h), one frame at a
+// time, through Predict() and Refine(). The file-based sources' MaskFor is const and safe from any
+// thread.
 #pragma once
 
 #include <memory>
@@ -83,21 +84,16 @@ class MaskSource {
   // is missing (unless allowed), unreadable, not 8-bit single-channel, or of another size.
   virtual FrameMask MaskFor(const io::FrameEntry& frame, const cv::Size& image_size) const = 0;
   // The mask of a loaded frame (image: its left image as tracking gets it; depth: CV_32F metres
-  // or empty). The file-based sources read MaskFor(frame, image.size()); the model sources run
-  // their network. Called by one thread at a time.
-  virtual FrameMask Segment(const io::FrameEntry& frame, const cv::Mat& image,
-                            const cv::Mat& depth) {
-    (void)depth;
-    return MaskFor(frame, image.size());
-  }
-  // Two steps for two threads, so that the network of frame k+1 runs while the CRF refines frame
-  // k: Predict() then Refine() give what Segment() gives. Sources that say Pipelined() (networks)
-  // leave FrameMask::pending to Refine(); the others do everything in Predict(). Each step is
-  // called by one thread at a time.
+  // or empty) in two steps, so that a network's next frame runs while the CRF refines this one:
+  // Predict() (the network) then Refine() (the CRF and the rest). Sources that say Pipelined()
+  // (networks) leave FrameMask::pending to Refine(); the file-based ones read MaskFor(frame,
+  // image.size()) in Predict() and have nothing to refine. Each step is called by one thread at a
+  // time.
   virtual bool Pipelined() const { return false; }
   virtual FrameMask Predict(const io::FrameEntry& frame, const cv::Mat& image,
                             const cv::Mat& depth) {
-    return Segment(frame, image, depth);
+    (void)depth;
+    return MaskFor(frame, image.size());
   }
   virtual void Refine(FrameMask* mask, const cv::Mat& image, const cv::Mat& depth) {
     (void)mask;

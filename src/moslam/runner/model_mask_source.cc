@@ -19,11 +19,8 @@ class ProviderMaskSource : public MaskSource {
     MOSLAM_CHECK(provider_ != nullptr);
   }
   FrameMask MaskFor(const io::FrameEntry& frame, const cv::Size&) const override {
-    ThrowInput("frame {}: a network mask source needs the frame's image (Segment, not MaskFor)",
+    ThrowInput("frame {}: a network mask source needs the frame's image (Predict, not MaskFor)",
                frame.index);
-  }
-  FrameMask Segment(const io::FrameEntry&, const cv::Mat& image, const cv::Mat& depth) override {
-    return ToFrameMask(provider_->Segment({image, depth}));
   }
   bool Pipelined() const override { return true; }
   FrameMask Predict(const io::FrameEntry&, const cv::Mat& image, const cv::Mat& depth) override {

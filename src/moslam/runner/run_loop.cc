@@ -82,15 +82,13 @@ LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options) {
 void PredictFrame(MaskSource& masks, LoadedFrame* frame) {
   MOSLAM_CHECK(frame->entry != nullptr) << "a loaded frame without its sequence entry";
   const auto start = Clock::now();
-  auto mask = std::make_shared<FrameMask>(
-      masks.Predict(*frame->entry, frame->input.image, frame->input.depth));
+  frame->pending_mask = masks.Predict(*frame->entry, frame->input.image, frame->input.depth);
   frame->mask_ms = MsSince(start);
-  frame->network_ms = mask->network_ms;
-  frame->pending_mask = std::move(mask);
+  frame->network_ms = frame->pending_mask->network_ms;
 }
 
 void RefineFrame(MaskSource& masks, LoadedFrame* frame) {
-  MOSLAM_CHECK(frame->pending_mask != nullptr) << "RefineFrame() before PredictFrame()";
+  MOSLAM_CHECK(frame->pending_mask.has_value()) << "RefineFrame() before PredictFrame()";
   const auto start = Clock::now();
   FrameMask& mask = *frame->pending_mask;
   masks.Refine(&mask, frame->input.image, frame->input.depth);
@@ -102,8 +100,6 @@ void RefineFrame(MaskSource& masks, LoadedFrame* frame) {
   frame->pending_mask.reset();
 }
 
-// Predict() then Refine() is Segment() for every source (MaskSource's defaults for the file
-// sources), so one thread can run both steps.
 void SegmentFrame(MaskSource& masks, LoadedFrame* frame) {
   PredictFrame(masks, frame);
   RefineFrame(masks, frame);

@@ -239,11 +239,11 @@ TEST(SegmentationStage, PipelinedStepsGiveWhatSegmentGives) {
   for (const io::FrameEntry& entry : seq.frames) {
     LoadedFrame frame = LoadImages(entry, Quiet());
     PredictFrame(*pipelined, &frame);
-    ASSERT_NE(frame.pending_mask, nullptr);
+    ASSERT_TRUE(frame.pending_mask.has_value());
     EXPECT_TRUE(frame.input.mask.empty());  // no mask before refinement
     EXPECT_EQ(frame.network_ms, 7.0);
     RefineFrame(*pipelined, &frame);
-    EXPECT_EQ(frame.pending_mask, nullptr);
+    EXPECT_FALSE(frame.pending_mask.has_value());
     const semantic::MaskResult expected = whole.Segment({frame.input.image, frame.input.depth});
     ASSERT_EQ(frame.input.mask.size(), expected.mask.size());
     EXPECT_EQ(cv::countNonZero(frame.input.mask != expected.mask), 0) << entry.index;
