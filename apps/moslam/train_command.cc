@@ -109,7 +109,18 @@ void AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   q->add_option("--eval-labels", cues.eval_labels,
                 "pixel-label folder, read only to report the cues' precision");
-  q->callback([] { weak::GenerateCues(cues); });
+  q->add_option("--segmenter", cues.segmenter_model,
+                "self-training: cues from this segmenter + CRF instead of classifiers");
+  q->add_option("--confidence", cues.confidence,
+                "with --segmenter: CRF marginal a pixel needs to be seeded")
+      ->capture_default_str();
+  static std::string crf_config;
+  q->add_option("--crf-config", crf_config,
+                "with --segmenter: YAML file of crf.* options (default: the CRF's defaults)");
+  q->callback([] {
+    if (!crf_config.empty()) cues.crf = semantic::LoadDenseCrfOptions(crf_config);
+    weak::GenerateCues(cues);
+  });
 
   static weak::SegmenterTrainOptions segmenter;
   CLI::App* s = train->add_subcommand("segmenter", "segmentation network on the fused cues");
@@ -129,6 +140,11 @@ void AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   s->add_option("--head-channels", segmenter.net.head_channels, "ASPP channels")
       ->capture_default_str();
+  s->add_option("--loss-stride", segmenter.loss_stride,
+                "losses on logits upsampled to input/N (0: the network's output stride)")
+      ->capture_default_str();
+  s->add_flag("!--unbalanced-seeds", segmenter.class_balanced_seeds,
+              "seeding loss as the plain mean over seeds (default: class-balanced, as SEC)");
   s->callback([] { weak::TrainSegmenter(segmenter); });
 }
 

@@ -151,16 +151,176 @@ void AddEvaluation(const cv::Mat& cue, const cv::Mat& labels, const std::vector<
   }
 }
 
+// Writes the cue maps (at each image's original size), gathers their statistics (and, with
+// evaluation labels, their precision) and writes cues.json at the end: shared by both rounds.
+class CueWriter {
+ public:
+  CueWriter(const CueGenerationOptions& options, const ImageList& list,
+            std::vector<std::string> seg_classes)
+      : options_(options),
+        list_(list),
+        seg_classes_(std::move(seg_classes)),
+        cue_folder_((fs::path(options.out) / "cues").string()),
+        preview_folder_((fs::path(options.out) / "preview").string()),
+        mapping_(options.eval_labels.empty() ? std::vector<int>{}
+                                             : EvalMapping(options, seg_classes_)),
+        class_pixels_(seg_classes_.size(), 0.0) {
+    internal::MakeFolder(cue_folder_);
+    internal::MakeFolder(preview_folder_);
+  }
+
+  // `cue` at the network's input size; written at entry i's original size.
+  void Write(size_t i, const cv::Mat& cue_small) {
+    const cv::Mat original = cv::imread(list_.entries[i].image, cv::IMREAD_UNCHANGED);
+    if (original.empty()) throw InputError("cannot read " + list_.entries[i].image);
+    cv::Mat cue;
+    cv::resize(cue_small, cue, original.size(), 0, 0, cv::INTER_NEAREST);
+    cv::imwrite(fmt::format("{}/{:06d}.png", cue_folder_, i), cue);
+    stats_.pixels += cue.total();
+    for (int y = 0; y < cue.rows; ++y) {
+      for (int x = 0; x < cue.cols; ++x) {
+        const int c = cue.at<uint8_t>(y, x);
+        if (c != kUnknown) {
+          stats_.seeded += 1;
+          class_pixels_[c] += 1;
+        }
+      }
+    }
+    if (!mapping_.empty()) {
+      const std::string label_path =
+          (fs::path(options_.eval_labels) / fs::path(list_.entries[i].image).stem()).string() +
+          ".png";
+      const cv::Mat labels = cv::imread(label_path, cv::IMREAD_GRAYSCALE);
+      if (labels.size() == cue.size()) AddEvaluation(cue, labels, mapping_, &stats_);
+    }
+  }
+
+  void WritePreview(size_t i, const std::vector<cv::Mat>& panels,
+                    const std::vector<std::string>& captions) const {
+    cv::imwrite(fmt::format("{}/cues_{:04d}.png", preview_folder_, i),
+                internal::SideBySide(panels, captions));
+  }
+
+  void Finish(const std::vector<std::string>& models) const {
+    nlohmann::json report = {{"classes", seg_classes_},
+                             {"images", list_.entries.size()},
+                             {"models", models},
+                             {"seeded_fraction", stats_.seeded / std::max(1.0, stats_.pixels)}};
+    for (size_t c = 0; c < seg_classes_.size(); ++c) {
+      report["class_fraction"][seg_classes_[c]] = class_pixels_[c] / std::max(1.0, stats_.pixels);
+    }
+    if (stats_.labelled_seeded > 0) {
+      report["precision"] = stats_.correct / stats_.labelled_seeded;
+      for (const auto& [c, n] : stats_.per_class_seeded) {
+        report["class_precision"][seg_classes_[c]] = stats_.per_class_correct.at(c) / n;
+      }
+      spdlog::info("cues: {:.1f} % of pixels seeded, precision {:.3f} against the pixel labels",
+                   100.0 * stats_.seeded / stats_.pixels, stats_.correct / stats_.labelled_seeded);
+      for (const auto& [c, n] : stats_.per_class_seeded) {
+        spdlog::info("cues: {} seeded on {:.1f} % of pixels, precision {:.3f}", seg_classes_[c],
+                     100.0 * class_pixels_[c] / std::max(1.0, stats_.pixels),
+                     stats_.per_class_correct.at(c) / n);
+      }
+    }
+    std::ofstream(fs::path(options_.out) / "cues.json") << report.dump(2) << "\n";
+  }
+
+ private:
+  const CueGenerationOptions& options_;
+  const ImageList& list_;
+  const std::vector<std::string> seg_classes_;
+  const std::string cue_folder_, preview_folder_;
+  const std::vector<int> mapping_;
+  CueStats stats_;
+  std::vector<double> class_pixels_;
+};
+
+ImageList TrainingList(const CueGenerationOptions& options) {
+  ImageList list = options.data.Load();
+  if (options.max_images > 0 && static_cast<int>(list.entries.size()) > options.max_images) {
+    list.entries.resize(options.max_images);
+  }
+  return list;
+}
+
+// The second round (CueGenerationOptions::segmenter_model): cues from a trained segmenter.
+void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
+  const ImageList list = TrainingList(options);
+  const std::vector<std::string> seg_classes = SegmenterClasses(list);
+  net::SegmenterNet net = net::LoadSegmenter(options.segmenter_model);
+  if (net->config().classes != seg_classes) {
+    throw InputError(fmt::format("cues: segmenter {} has classes [{}], the data has [{}]",
+                                 options.segmenter_model, fmt::join(net->config().classes, ", "),
+                                 fmt::join(seg_classes, ", ")));
+  }
+  net->eval();
+  torch::NoGradGuard no_grad;
+  const int background = net->config().BackgroundIndex();
+  AugmentOptions resize;
+  resize.output_width = net->config().input_width;
+  resize.output_height = net->config().input_height;
+  semantic::DenseCrfOptions crf_options = options.crf;
+  crf_options.depth = false;
+  crf_options.num_threads = std::max(1, options.threads);
+  semantic::DenseCrf crf(crf_options);
+  CueWriter writer(options, list, seg_classes);
+  Progress progress("cues", list.entries.size(), 10.0, "img");
+  std::mt19937_64 rng(1);
+  for (size_t i = 0; i < list.entries.size(); ++i) {
+    const Sample sample = LoadSample(list, static_cast<int>(i), resize, rng, false);
+    const torch::Tensor logits = net->forward(ToInputTensor(sample.image).unsqueeze(0)).logits;
+    const torch::Tensor probabilities =
+        torch::softmax(
+            torch::nn::functional::interpolate(
+                logits, torch::nn::functional::InterpolateFuncOptions()
+                            .size(std::vector<int64_t>{sample.image.rows, sample.image.cols})
+                            .mode(torch::kBilinear)
+                            .align_corners(false)),
+            1)
+            .squeeze(0)
+            .to(torch::kFloat32)
+            .contiguous();
+    const int sizes[] = {static_cast<int>(probabilities.size(0)), sample.image.rows,
+                         sample.image.cols};
+    const cv::Mat planar(3, sizes, CV_32F, probabilities.data_ptr<float>());
+    const cv::Mat cue = CuesFromSegmentation(planar, sample.classes, background, sample.image, crf,
+                                             options.confidence);
+    writer.Write(i, cue);
+    if (static_cast<int>(i) < options.preview_images) {
+      cv::Mat argmax(sample.image.size(), CV_8UC1);
+      for (int y = 0; y < argmax.rows; ++y) {
+        for (int x = 0; x < argmax.cols; ++x) {
+          int best = 0;
+          for (int c = 1; c < sizes[0]; ++c) {
+            if (planar.at<float>(c, y, x) > planar.at<float>(best, y, x)) best = c;
+          }
+          argmax.at<uint8_t>(y, x) = static_cast<uint8_t>(best);
+        }
+      }
+      writer.WritePreview(
+          i, {sample.image, RenderCue(argmax, sample.image), RenderCue(cue, sample.image)},
+          {"image", "segmenter", "CRF cue"});
+    }
+    progress.Update(i + 1);
+  }
+  progress.Finish();
+  writer.Finish({options.segmenter_model});
+}
+
 }  // namespace
 
 void GenerateCues(const CueGenerationOptions& options) {
   options.data.Check();
   options.cues.Check();
   at::set_num_threads(options.threads);
-  ImageList list = options.data.Load();
-  if (options.max_images > 0 && static_cast<int>(list.entries.size()) > options.max_images) {
-    list.entries.resize(options.max_images);
+  if (!options.segmenter_model.empty()) {
+    if (!options.colour_model.empty() || !options.grey_model.empty()) {
+      throw InputError("cues: give either --segmenter or classifier models, not both");
+    }
+    GenerateCuesFromSegmenter(options);
+    return;
   }
+  const ImageList list = TrainingList(options);
   const std::vector<std::string> classifier_classes =
       net::ReadNetConfig(options.colour_model.empty() ? options.grey_model : options.colour_model)
           .classes;
@@ -173,15 +333,7 @@ void GenerateCues(const CueGenerationOptions& options) {
   AugmentOptions resize;
   resize.output_width = config.input_width;
   resize.output_height = config.input_height;
-  const std::string cue_folder = (fs::path(options.out) / "cues").string();
-  const std::string preview_folder = (fs::path(options.out) / "preview").string();
-  internal::MakeFolder(cue_folder);
-  internal::MakeFolder(preview_folder);
-  const std::vector<int> mapping =
-      options.eval_labels.empty() ? std::vector<int>{} : EvalMapping(options, seg_classes);
-
-  CueStats stats;
-  std::vector<double> class_pixels(seg_classes.size(), 0.0);
+  CueWriter writer(options, list, seg_classes);
   Progress progress("cues", list.entries.size(), 10.0, "img");
   std::mt19937_64 rng(1);
   for (size_t i = 0; i < list.entries.size(); ++i) {
@@ -215,53 +367,16 @@ void GenerateCues(const CueGenerationOptions& options) {
     }
     const cv::Mat fused =
         refined.size() == 2 ? FuseCues(refined[0], refined[1], options.fuse_one_sided) : refined[0];
-    const cv::Mat original = cv::imread(list.entries[i].image, cv::IMREAD_UNCHANGED);
-    if (original.empty()) throw InputError("cannot read " + list.entries[i].image);
-    cv::Mat cue;
-    cv::resize(fused, cue, original.size(), 0, 0, cv::INTER_NEAREST);
-    cv::imwrite(fmt::format("{}/{:06d}.png", cue_folder, i), cue);
-    stats.pixels += cue.total();
-    for (int y = 0; y < cue.rows; ++y) {
-      for (int x = 0; x < cue.cols; ++x) {
-        const int c = cue.at<uint8_t>(y, x);
-        if (c != kUnknown) {
-          stats.seeded += 1;
-          class_pixels[c] += 1;
-        }
-      }
-    }
-    if (!mapping.empty()) {
-      const std::string label_path =
-          (fs::path(options.eval_labels) / fs::path(list.entries[i].image).stem()).string() +
-          ".png";
-      const cv::Mat labels = cv::imread(label_path, cv::IMREAD_GRAYSCALE);
-      if (labels.size() == cue.size()) AddEvaluation(cue, labels, mapping, &stats);
-    }
+    writer.Write(i, fused);
     if (static_cast<int>(i) < options.preview_images) {
       panels.push_back(RenderCue(fused, sample.image));
       captions.push_back("fused");
-      cv::imwrite(fmt::format("{}/cues_{:04d}.png", preview_folder, i),
-                  internal::SideBySide(panels, captions));
+      writer.WritePreview(i, panels, captions);
     }
     progress.Update(i + 1);
   }
   progress.Finish();
-  nlohmann::json report = {{"classes", seg_classes},
-                           {"images", list.entries.size()},
-                           {"models", {options.colour_model, options.grey_model}},
-                           {"seeded_fraction", stats.seeded / std::max(1.0, stats.pixels)}};
-  for (size_t c = 0; c < seg_classes.size(); ++c) {
-    report["class_fraction"][seg_classes[c]] = class_pixels[c] / std::max(1.0, stats.pixels);
-  }
-  if (stats.labelled_seeded > 0) {
-    report["precision"] = stats.correct / stats.labelled_seeded;
-    for (const auto& [c, n] : stats.per_class_seeded) {
-      report["class_precision"][seg_classes[c]] = stats.per_class_correct[c] / n;
-    }
-    spdlog::info("cues: {:.1f} % of pixels seeded, precision {:.3f} against the pixel labels",
-                 100.0 * stats.seeded / stats.pixels, stats.correct / stats.labelled_seeded);
-  }
-  std::ofstream(fs::path(options.out) / "cues.json") << report.dump(2) << "\n";
+  writer.Finish({options.colour_model, options.grey_model});
 }
 
 }  // namespace moslam::weak

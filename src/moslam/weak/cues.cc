@@ -201,6 +201,54 @@ cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey, bool one_sided) {
   return fused;
 }
 
+cv::Mat CuesFromSegmentation(const cv::Mat& probabilities, const std::vector<int>& present,
+                             int background, const cv::Mat& image, semantic::DenseCrf& crf,
+                             float confidence) {
+  if (probabilities.dims != 3 || probabilities.type() != CV_32F || !probabilities.isContinuous()) {
+    ThrowInput(
+        "CuesFromSegmentation: probabilities must be a continuous {{C, H, W}} CV_32F matrix");
+  }
+  const int num_classes = probabilities.size[0];
+  if (num_classes < 2 || num_classes >= kUnknown) {
+    ThrowInput("CuesFromSegmentation: {} classes (2 to {} supported)", num_classes, kUnknown - 1);
+  }
+  if (image.rows != probabilities.size[1] || image.cols != probabilities.size[2]) {
+    ThrowInput("CuesFromSegmentation: image {}x{} and probabilities {}x{} differ in size",
+               image.cols, image.rows, probabilities.size[2], probabilities.size[1]);
+  }
+  if (!(confidence > 0.0f && confidence <= 1.0f)) {
+    ThrowInput("CuesFromSegmentation: confidence must be in (0, 1], got {}", confidence);
+  }
+  std::vector<bool> keep(num_classes, false);
+  if (background >= 0 && background < num_classes) keep[background] = true;
+  for (int c : present) {
+    if (c < 0 || c >= num_classes) {
+      ThrowInput("CuesFromSegmentation: present class {} out of range [0, {})", c, num_classes);
+    }
+    keep[c] = true;
+  }
+  // Absent classes get probability zero (the CRF clamps it to its minimum, a large energy), so
+  // neither the CRF nor the cue can choose them.
+  cv::Mat unaries = probabilities.clone();
+  for (int c = 0; c < num_classes; ++c) {
+    if (!keep[c]) semantic::LabelPlane(unaries, c).setTo(0.0f);
+  }
+  const semantic::CrfResult result =
+      crf.Infer(image, cv::Mat(), semantic::Unaries::FromProbabilities(unaries));
+  cv::Mat cues(image.size(), CV_8UC1, cv::Scalar(kUnknown));
+  for (int y = 0; y < image.rows; ++y) {
+    const unsigned char* label = result.labels.ptr<unsigned char>(y);
+    unsigned char* out = cues.ptr<unsigned char>(y);
+    for (int x = 0; x < image.cols; ++x) {
+      const int l = label[x];
+      if (keep[l] && result.marginals.at<float>(l, y, x) >= confidence) {
+        out[x] = static_cast<unsigned char>(l);
+      }
+    }
+  }
+  return cues;
+}
+
 namespace {
 
 cv::Mat AsBgr(const cv::Mat& image, const char* function) {

@@ -10,6 +10,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "moslam/semantic/dense_crf.h"
+
 namespace moslam::weak {
 
 constexpr unsigned char kUnknown = 255;
@@ -53,6 +55,17 @@ cv::Mat RefineWithSuperpixels(const cv::Mat& seeds, const cv::Mat& image,
 // they disagree the pixel becomes kUnknown; where only one gives a label, it is kept.
 // With `one_sided` false, only labels both cues agree on are kept (higher precision, fewer seeds).
 cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey, bool one_sided = true);
+
+// Cues of a second (self-training) round, from a trained segmentation network rather than from
+// classifiers: its per-pixel class probabilities `probabilities` ({C, H, W} CV_32F at the image's
+// size), with the classes absent from the image-level labels removed (`present`; `background`,
+// when >= 0, is always kept), refined by `crf` on `image` (the fully connected CRF follows the
+// image's edges where the network's upsampled output is blurry). A pixel takes the CRF's label
+// when its marginal is at least `confidence`, else kUnknown. No pixel label is involved: the
+// image-level labels and the image are all it uses, as in the first round.
+cv::Mat CuesFromSegmentation(const cv::Mat& probabilities, const std::vector<int>& present,
+                             int background, const cv::Mat& image, semantic::DenseCrf& crf,
+                             float confidence);
 
 // Pseudo-colour rendering for inspection: each class a fixed colour, unknown black, blended over
 // the image (CV_8UC3 output of the image's size).

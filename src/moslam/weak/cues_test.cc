@@ -200,6 +200,64 @@ TEST(Cues, FusionKeepsAgreementAndOneSidedCuesAndDropsConflicts) {
   EXPECT_EQ(cv::countNonZero(agreed != expected_agreed), 0);
 }
 
+// The self-training round's cues: a segmenter's blurry disc (its probability falls off 8 px
+// beyond the disc's edge, as bilinearly upsampled stride-16 logits do), a class the image-level
+// labels do not list, and a flat region where the network is undecided.
+TEST(Cues, SegmentationCuesFollowTheImageAndTheImageLevelLabels) {
+  const cv::Mat image = DiscImage();
+  // Classes: 0 the disc's, 1 absent from the labels, 2 background.
+  const int sizes[] = {3, kSide, kSide};
+  cv::Mat probabilities(3, sizes, CV_32F);
+  for (int y = 0; y < kSide; ++y) {
+    for (int x = 0; x < kSide; ++x) {
+      const float d = std::hypot(x - kCentre.x, y - kCentre.y) - kRadius;
+      // Disc probability 0.9 inside, 0.85 up to 8 px outside, then 0.1.
+      float p0 = d <= 0.0f ? 0.9f : (d <= 8.0f ? 0.85f : 0.1f);
+      float p1 = 0.0f;
+      if (y >= 110 && x < 40) {  // the absent class is the network's favourite here
+        p1 = 0.8f;
+        p0 = 0.05f;
+      }
+      probabilities.at<float>(0, y, x) = p0;
+      probabilities.at<float>(1, y, x) = p1;
+      probabilities.at<float>(2, y, x) = 1.0f - p0 - p1;
+    }
+  }
+  semantic::DenseCrfOptions crf_options;
+  crf_options.num_threads = 1;
+  semantic::DenseCrf crf(crf_options);
+  const cv::Mat cues = CuesFromSegmentation(probabilities, {0}, 2, image, crf, 0.8f);
+  ASSERT_EQ(cues.size(), image.size());
+  int spill = 0, spill_pixels = 0, inside = 0, inside_pixels = 0;
+  for (int y = 0; y < kSide; ++y) {
+    for (int x = 0; x < kSide; ++x) {
+      const int c = cues.at<uchar>(y, x);
+      EXPECT_NE(c, 1) << "absent class at " << x << "," << y;
+      const float d = std::hypot(x - kCentre.x, y - kCentre.y) - kRadius;
+      if (d > 2.0f && d <= 8.0f) {
+        ++spill_pixels;
+        spill += c == 0;
+      } else if (d < -2.0f) {
+        ++inside_pixels;
+        inside += c == 0;
+      }
+    }
+  }
+  // The network's confident spill ring (0.85 for the disc) does not become disc cues: the CRF
+  // follows the colour edge. Inside, the disc is seeded.
+  EXPECT_LT(spill, spill_pixels / 20) << spill << " of " << spill_pixels;
+  EXPECT_GT(inside, inside_pixels * 9 / 10) << inside << " of " << inside_pixels;
+  // Where the absent class was favoured, the background takes over.
+  EXPECT_EQ(cues.at<uchar>(120, 20), 2);
+  // A higher confidence keeps a strict subset of the seeds, with the same labels.
+  const cv::Mat strict = CuesFromSegmentation(probabilities, {0}, 2, image, crf, 1.0f);
+  const int kept = cv::countNonZero(strict != kUnknown);
+  EXPECT_LT(kept, cv::countNonZero(cues != kUnknown));
+  EXPECT_EQ(cv::countNonZero((strict != kUnknown) & (strict != cues)), 0);
+  EXPECT_THROW(CuesFromSegmentation(probabilities, {3}, 2, image, crf, 0.8f), InputError);
+  EXPECT_THROW(CuesFromSegmentation(probabilities, {0}, 2, image, crf, 0.0f), InputError);
+}
+
 TEST(Cues, OptionsCheckNamesTheField) {
   CueOptions options;
   EXPECT_NO_THROW(options.Check());

@@ -25,7 +25,8 @@ void RequireLogits(const torch::Tensor& logits, const char* function) {
 
 }  // namespace
 
-torch::Tensor SeedingLoss(const torch::Tensor& logits, const torch::Tensor& cues) {
+torch::Tensor SeedingLoss(const torch::Tensor& logits, const torch::Tensor& cues,
+                          bool class_balanced) {
   RequireLogits(logits, "SeedingLoss");
   const int64_t num_classes = logits.size(1);
   if (!cues.defined() || cues.dim() != 3 || cues.size(0) != logits.size(0) ||
@@ -52,7 +53,9 @@ torch::Tensor SeedingLoss(const torch::Tensor& logits, const torch::Tensor& cues
   const torch::Tensor num_present = (counts > 0).sum().to(logits.dtype());
   const torch::Tensor label_counts =
       counts.clamp_min(1.0).index_select(0, labels.flatten()).view_as(labels);
-  const torch::Tensor weights = seeded.to(logits.dtype()) / label_counts / num_present;
+  const torch::Tensor weights = class_balanced
+                                    ? seeded.to(logits.dtype()) / label_counts / num_present
+                                    : seeded.to(logits.dtype()) / counts.sum().clamp_min(1.0);
   const torch::Tensor log_probabilities =
       torch::log_softmax(logits, 1).gather(1, labels.unsqueeze(1)).squeeze(1);
   return -(weights.detach() * log_probabilities).sum();

@@ -101,6 +101,24 @@ TEST(Losses, SeedingLossIsClassBalanced) {
               -0.5 * (1.0 - p.index({0, 0, 0, Slice(0, 100)})).mean().item<double>(), 1e-12);
 }
 
+TEST(Losses, UnbalancedSeedingLossIsThePlainMeanOverSeeds) {
+  torch::manual_seed(4);
+  const torch::Tensor logits = torch::randn({2, 3, 2, 5}, kDouble);
+  torch::Tensor cues = torch::randint(0, 3, {2, 2, 5}, torch::kInt64);
+  cues.index_put_({0, 1, 2}, kUnknown);
+  cues.index_put_({1, 0, 4}, kUnknown);
+  const torch::Tensor seeded = cues.ne(kUnknown);
+  const torch::Tensor log_p = torch::log_softmax(logits, 1).gather(
+      1, torch::where(seeded, cues, torch::zeros_like(cues)).unsqueeze(1));
+  const double expected = -log_p.squeeze(1).masked_select(seeded).mean().item<double>();
+  EXPECT_NEAR(SeedingLoss(logits, cues, /*class_balanced=*/false).item<double>(), expected, 1e-12);
+  // Its gradient against central differences, as for the balanced form.
+  const auto f = [&](const torch::Tensor& x) { return SeedingLoss(x, cues, false); };
+  const torch::Tensor analytic = AnalyticGradient(f, logits);
+  const torch::Tensor numeric = NumericGradient(f, logits, 1e-6);
+  EXPECT_LT((analytic - numeric).abs().max().item<double>(), 1e-8);
+}
+
 TEST(Losses, SeedingLossWithoutSeedsIsAZeroWithAGraph) {
   const torch::Tensor logits = torch::randn({1, 3, 4, 4}).requires_grad_(true);
   const torch::Tensor cues = torch::full({1, 4, 4}, int64_t{kUnknown}, torch::kInt64);

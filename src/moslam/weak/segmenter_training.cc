@@ -99,6 +99,20 @@ semantic::DenseCrfOptions ScaledCrf(semantic::DenseCrfOptions crf, double factor
   return crf;
 }
 
+// The logits the losses see: the network's, or bilinearly upsampled to input / loss_stride
+// (training.h, SegmenterTrainOptions::loss_stride).
+torch::Tensor LossLogits(const torch::Tensor& logits, const torch::Tensor& images,
+                         int loss_stride) {
+  if (loss_stride <= 0) return logits;
+  const int64_t h = std::max<int64_t>(1, images.size(2) / loss_stride);
+  const int64_t w = std::max<int64_t>(1, images.size(3) / loss_stride);
+  if (h <= logits.size(2) && w <= logits.size(3)) return logits;
+  return torch::nn::functional::interpolate(logits, torch::nn::functional::InterpolateFuncOptions()
+                                                        .size(std::vector<int64_t>{h, w})
+                                                        .mode(torch::kBilinear)
+                                                        .align_corners(false));
+}
+
 cv::Mat LabelsToMat(const torch::Tensor& labels) {
   const torch::Tensor l = labels.to(torch::kUInt8).contiguous();
   cv::Mat out(static_cast<int>(l.size(0)), static_cast<int>(l.size(1)), CV_8U);
@@ -142,6 +156,10 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
   if (options.grey_probability < 0 || options.grey_probability > 1) {
     throw InputError("segmenter: grey_probability must be in [0, 1]");
   }
+  if (options.loss_stride < 0) {
+    throw InputError(
+        fmt::format("segmenter: loss_stride must be >= 0, got {}", options.loss_stride));
+  }
   at::set_num_threads(common.threads);
   torch::manual_seed(common.seed);
   const ImageList list = internal::LoadTrainingList(common);
@@ -179,15 +197,15 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
     if (background >= 0) batch.labels.select(1, background).fill_(1.0);
     const torch::Tensor labels = batch.labels.to(device);
     const net::SegmenterOutput out = net->forward(batch.images.to(device));
-    const int64_t h = out.logits.size(2), w = out.logits.size(3);
+    const torch::Tensor logits = LossLogits(out.logits, batch.images, options.loss_stride);
+    const int64_t h = logits.size(2), w = logits.size(3);
     if (!crf) {
       crf = std::make_unique<semantic::DenseCrf>(
           ScaledCrf(options.crf, static_cast<double>(batch.images.size(3)) / w));
     }
     const torch::Tensor cues = DownsampleCues(batch.cues, h, w).to(device);
-    const torch::Tensor seed = SeedingLoss(out.logits, cues);
-    const torch::Tensor constrain =
-        ConstrainLoss(out.logits, CrfTargets(out.logits, batch.bgr, *crf));
+    const torch::Tensor seed = SeedingLoss(logits, cues, options.class_balanced_seeds);
+    const torch::Tensor constrain = ConstrainLoss(logits, CrfTargets(logits, batch.bgr, *crf));
     const torch::Tensor classes = torch::binary_cross_entropy_with_logits(out.class_logits, labels);
     const torch::Tensor loss =
         seed + options.constrain_weight * constrain + options.class_weight * classes;
@@ -200,7 +218,7 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
                    {"constrain", constrain.item<double>()},
                    {"class", classes.item<double>()}};
     const torch::Tensor seeded = cues.ne(kUnknown);
-    stats.correct = (out.logits.detach().argmax(1).eq(cues) & seeded).sum().item<double>();
+    stats.correct = (logits.detach().argmax(1).eq(cues) & seeded).sum().item<double>();
     stats.count = seeded.sum().item<double>();
     stats.images = static_cast<int>(indices.size());
     return stats;
@@ -212,7 +230,9 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
   internal::WriteReport(common, "segmenter", summary, net->config(), list.entries.size(),
                         {{"constrain_weight", options.constrain_weight},
                          {"class_weight", options.class_weight},
-                         {"grey_probability", options.grey_probability}});
+                         {"grey_probability", options.grey_probability},
+                         {"loss_stride", options.loss_stride},
+                         {"class_balanced_seeds", options.class_balanced_seeds}});
   return summary;
 }
 

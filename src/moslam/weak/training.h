@@ -80,6 +80,13 @@ struct CueGenerationOptions {
   int preview_images = 12;
   // Optional: pixel-label folder used only to report the cues' precision (evaluation).
   std::string eval_labels;
+  // Self-training (a second round; replaces the classifiers when set): cues from a segmenter
+  // trained on first-round cues, its softmax with the image-level labels' absent classes removed
+  // and refined by `crf` (colour) at the cue size, kept where the CRF's marginal is at least
+  // `confidence` (CuesFromSegmentation in cues.h). Its classes must be the data's.
+  std::string segmenter_model;
+  semantic::DenseCrfOptions crf;
+  float confidence = 0.8f;
 };
 
 struct SegmenterTrainOptions {
@@ -89,7 +96,16 @@ struct SegmenterTrainOptions {
   std::string init_classifier;  // backbone initialized from this classifier (else ImageNet)
   std::string imagenet_weights;
   double constrain_weight = 1.0;  // weight of the constrain-to-boundary loss
-  double class_weight = 0.1;      // weight of the auxiliary image-level BCE
+  // Resolution of both losses, as a stride in pixels of the network input; 0: the network's
+  // output stride. A finer stride (e.g. 4) upsamples the logits bilinearly, as inference does,
+  // before the losses: the cues keep more of their shape (DownsampleCues drops every cell that
+  // straddles two labels, which at stride 16 is most of a person) and the CRF of the constrain loss
+  // sees the image's edges at 4x the resolution, so the network learns logits whose upsampling
+  // follows the boundaries.
+  int loss_stride = 0;
+  // Seeding loss weighting (losses.h): class-balanced as in SEC, or the plain mean over seeds.
+  bool class_balanced_seeds = true;
+  double class_weight = 0.1;  // weight of the auxiliary image-level BCE
   // Probability that a training image is turned grey (replicated to three channels), so that one
   // network serves colour and grey cameras (KITTI odometry's cameras 0 and 1 are grey).
   double grey_probability = 0.3;

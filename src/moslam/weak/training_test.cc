@@ -14,6 +14,7 @@
 
 #include "moslam/net/model_file.h"
 #include "moslam/testing/shared_data.h"
+#include "moslam/util/error.h"
 #include "moslam/weak/training.h"
 #include "moslam/weak/training_loop.h"
 
@@ -188,6 +189,30 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   EXPECT_THAT(net->config().classes, ::testing::ElementsAre("square", "disc", "background"));
   EXPECT_THAT(net->config().movable, ::testing::ElementsAre("square"));
   EXPECT_EQ(net->config().background, "background");
+
+  // A self-training round: cues from the segmenter and the CRF, of the same format and classes,
+  // which a second segmenter (losses at stride 4, plain mean over seeds) trains on.
+  CueGenerationOptions second = cues;
+  second.colour_model.clear();
+  second.segmenter_model = summary.model;
+  second.out = dir_.path() + "/cues2";
+  GenerateCues(second);
+  const nlohmann::json report2 = nlohmann::json::parse(std::ifstream(second.out + "/cues.json"));
+  EXPECT_EQ(report2["classes"], report["classes"]);
+  EXPECT_GT(report2["seeded_fraction"].get<double>(), 0.2);
+  EXPECT_GT(report2["class_fraction"]["square"].get<double>(), 0.0);
+  EXPECT_GT(report2["class_fraction"]["disc"].get<double>(), 0.0);
+  EXPECT_TRUE(fs::exists(second.out + "/cues/000031.png"));
+  EXPECT_TRUE(fs::exists(second.out + "/preview/cues_0001.png"));
+  seg.common.out = dir_.path() + "/seg2";
+  seg.common.epochs = 2;
+  seg.cues = second.out;
+  seg.loss_stride = 4;
+  seg.class_balanced_seeds = false;
+  EXPECT_TRUE(fs::exists(TrainSegmenter(seg).model));
+  // Classifier models and a segmenter together are a configuration error.
+  second.colour_model = classifier.model;
+  EXPECT_THROW(GenerateCues(second), InputError);
 }
 
 }  // namespace
