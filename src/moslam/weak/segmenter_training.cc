@@ -45,15 +45,21 @@ void CheckCues(const SegmenterTrainOptions& options, const ImageList& list) {
   }
 }
 
-// Copies the backbone weights of a trained classifier (same backbone options required).
+// Copies the backbone weights of a trained classifier (same last block required). The output
+// strides may differ: dilation changes no weight's shape, so a classifier trained at stride 8 for
+// finer activation maps can start a stride-16 segmenter that meets the inference budget.
 void InitFromClassifier(const std::string& path, net::SegmenterNet& net) {
   net::ClassifierNet classifier = net::LoadClassifier(path);
   const auto& a = classifier->config().backbone;
   const auto& b = net->config().backbone;
-  if (a.last_block != b.last_block || a.output_stride != b.output_stride) {
-    throw InputError(fmt::format(
-        "segmenter: classifier {} has backbone last_block {} stride {}, the segmenter {} {}", path,
-        a.last_block, a.output_stride, b.last_block, b.output_stride));
+  if (a.last_block != b.last_block) {
+    throw InputError(
+        fmt::format("segmenter: classifier {} has backbone last_block {}, the segmenter {}", path,
+                    a.last_block, b.last_block));
+  }
+  if (a.output_stride != b.output_stride) {
+    spdlog::info("segmenter: backbone from a stride-{} classifier, trained at stride {}",
+                 a.output_stride, b.output_stride);
   }
   torch::NoGradGuard no_grad;
   auto source = classifier->backbone()->named_parameters();

@@ -215,5 +215,53 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   EXPECT_THROW(GenerateCues(second), InputError);
 }
 
+// A classifier trained at stride 8 (finer activation maps) starts a stride-16 segmenter: the
+// backbone's weights are copied across strides, since dilation changes no weight's shape.
+TEST_F(TrainingTest, SegmenterStartsFromAClassifierOfAnotherStride) {
+  net::NetConfig config;
+  config.kind = net::NetKind::kClassifier;
+  config.classes = {"square", "disc"};
+  config.movable = {"square"};
+  config.input_width = 64;
+  config.input_height = 48;
+  config.backbone.last_block = 7;  // natural stride 16, dilated to 8
+  config.backbone.output_stride = 8;
+  torch::manual_seed(5);
+  net::ClassifierNet classifier(config);
+  const std::string classifier_path = dir_.path() + "/cls8.mnet";
+  net::SaveClassifier(classifier_path, classifier);
+
+  CueGenerationOptions cues;
+  cues.data.list = data_ + "/list.txt";
+  cues.data.classes = data_ + "/classes.txt";
+  cues.colour_model = classifier_path;
+  cues.out = dir_.path() + "/cues8";
+  cues.cues.superpixel_size = 6;
+  cues.preview_images = 0;
+  GenerateCues(cues);
+
+  SegmenterTrainOptions seg;
+  seg.common = ToyOptions(data_, dir_.path() + "/seg16");
+  seg.common.epochs = 1;
+  seg.common.preview_images = 0;
+  seg.cues = cues.out;
+  seg.init_classifier = classifier_path;
+  seg.net.backbone.last_block = 7;
+  seg.net.backbone.output_stride = 16;
+  seg.net.backbone.frozen_blocks = 8;  // all frozen: the copied weights stay as they were
+  seg.net.head_channels = 16;
+  net::SegmenterNet segmenter = net::LoadSegmenter(TrainSegmenter(seg).model);
+  EXPECT_EQ(segmenter->config().backbone.output_stride, 16);
+  auto source = classifier->backbone()->named_parameters();
+  int compared = 0;
+  for (const auto& item : segmenter->backbone()->named_parameters()) {
+    // The segmenter is saved in float16.
+    EXPECT_TRUE(torch::allclose(item.value().to(torch::kFloat32), source[item.key()], 1e-3, 1e-4))
+        << item.key();
+    ++compared;
+  }
+  EXPECT_GT(compared, 10);
+}
+
 }  // namespace
 }  // namespace moslam::weak
