@@ -114,6 +114,12 @@ void AddTrainCommand(CLI::App& app) {
   q->add_option("--confidence", cues.confidence,
                 "with --segmenter: CRF marginal a pixel needs to be seeded")
       ->capture_default_str();
+  q->add_option("--fallback-cues", cues.fallback_cues,
+                "with --segmenter: cue folder for images where the segmenter misses a labelled "
+                "class (default: such images get no cues)");
+  q->add_option("--min-class-pixels", cues.min_class_pixels,
+                "with --segmenter: fraction of an image a labelled class must be seeded on")
+      ->capture_default_str();
   static std::string crf_config;
   q->add_option("--crf-config", crf_config,
                 "with --segmenter: YAML file of crf.* options (default: the CRF's defaults)");

@@ -243,8 +243,36 @@ ImageList TrainingList(const CueGenerationOptions& options) {
   return list;
 }
 
+// True when a labelled class (other than the background) has fewer than `min_fraction` of the
+// cue's pixels.
+bool MissesALabelledClass(const cv::Mat& cue, const std::vector<int>& classes, int background,
+                          float min_fraction) {
+  for (int c : classes) {
+    if (c == background) continue;
+    if (cv::countNonZero(cue == c) < min_fraction * cue.total()) return true;
+  }
+  return false;
+}
+
+// Cue `index` of `folder` resized to `size` (nearest), or all kUnknown without a folder.
+cv::Mat FallbackCue(const std::string& folder, size_t index, cv::Size size) {
+  if (folder.empty()) return cv::Mat(size, CV_8UC1, cv::Scalar(kUnknown));
+  const std::string path = fmt::format("{}/cues/{:06d}.png", folder, index);
+  const cv::Mat cue = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (cue.empty() || cue.type() != CV_8UC1) {
+    throw InputError("cues: fallback cue " + path + " is missing or not an 8-bit label image");
+  }
+  cv::Mat resized;
+  cv::resize(cue, resized, size, 0, 0, cv::INTER_NEAREST);
+  return resized;
+}
+
 // The second round (CueGenerationOptions::segmenter_model): cues from a trained segmenter.
 void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
+  if (!(options.min_class_pixels >= 0.0f && options.min_class_pixels < 1.0f)) {
+    throw InputError(
+        fmt::format("cues: min_class_pixels must be in [0, 1), got {}", options.min_class_pixels));
+  }
   const ImageList list = TrainingList(options);
   const std::vector<std::string> seg_classes = SegmenterClasses(list);
   net::SegmenterNet net = net::LoadSegmenter(options.segmenter_model);
@@ -266,6 +294,7 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
   CueWriter writer(options, list, seg_classes);
   Progress progress("cues", list.entries.size(), 10.0, "img");
   std::mt19937_64 rng(1);
+  size_t missed = 0;
   for (size_t i = 0; i < list.entries.size(); ++i) {
     const Sample sample = LoadSample(list, static_cast<int>(i), resize, rng, false);
     const torch::Tensor logits = net->forward(ToInputTensor(sample.image).unsqueeze(0)).logits;
@@ -283,8 +312,12 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
     const int sizes[] = {static_cast<int>(probabilities.size(0)), sample.image.rows,
                          sample.image.cols};
     const cv::Mat planar(3, sizes, CV_32F, probabilities.data_ptr<float>());
-    const cv::Mat cue = CuesFromSegmentation(planar, sample.classes, background, sample.image, crf,
-                                             options.confidence);
+    cv::Mat cue = CuesFromSegmentation(planar, sample.classes, background, sample.image, crf,
+                                       options.confidence);
+    if (MissesALabelledClass(cue, sample.classes, background, options.min_class_pixels)) {
+      ++missed;
+      cue = FallbackCue(options.fallback_cues, i, cue.size());
+    }
     writer.Write(i, cue);
     if (static_cast<int>(i) < options.preview_images) {
       cv::Mat argmax(sample.image.size(), CV_8UC1);
@@ -304,6 +337,9 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
     progress.Update(i + 1);
   }
   progress.Finish();
+  spdlog::info("cues: the segmenter missed a labelled class in {} of {} images ({})", missed,
+               list.entries.size(),
+               options.fallback_cues.empty() ? "left without cues" : "first-round cues used");
   writer.Finish({options.segmenter_model});
 }
 

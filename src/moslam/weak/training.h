@@ -87,6 +87,13 @@ struct CueGenerationOptions {
   std::string segmenter_model;
   semantic::DenseCrfOptions crf;
   float confidence = 0.8f;
+  // An image whose labels list a class the segmenter's cue does not seed (at least
+  // `min_class_pixels` of its pixels) was missed by the segmenter, and its confident background
+  // there would teach the next network to miss it too: such an image takes its cue from
+  // `fallback_cues` (a cue folder of the same data, e.g. the first round's), or, without one, no
+  // cue at all (every pixel kUnknown).
+  std::string fallback_cues;
+  float min_class_pixels = 0.001f;
 };
 
 struct SegmenterTrainOptions {

@@ -210,6 +210,33 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   seg.loss_stride = 4;
   seg.class_balanced_seeds = false;
   EXPECT_TRUE(fs::exists(TrainSegmenter(seg).model));
+  // Where a labelled class is seeded on less than min_class_pixels of the image (here 99 %: every
+  // image with two labels, and those with one unless the segmenter floods it), the image takes the
+  // fallback cue, or none without one; other images keep the segmenter's cue.
+  CueGenerationOptions strict = second;
+  strict.out = dir_.path() + "/cues3";
+  strict.min_class_pixels = 0.99f;
+  GenerateCues(strict);
+  CueGenerationOptions fallback = strict;
+  fallback.out = dir_.path() + "/cues4";
+  fallback.fallback_cues = cues.out;
+  GenerateCues(fallback);
+  const auto cue = [](const std::string& folder, size_t i) {
+    return cv::imread(fmt::format("{}/cues/{:06d}.png", folder, i), cv::IMREAD_UNCHANGED);
+  };
+  int missed = 0;
+  for (size_t i = 0; i < toys_.size(); ++i) {
+    const cv::Mat own = cue(second.out, i);
+    bool misses = false;
+    for (const auto& [present, label] : {std::pair{toys_[i].square, 0}, {toys_[i].disc, 1}}) {
+      misses |= present && cv::countNonZero(own == label) < 0.99 * own.total();
+    }
+    missed += misses;
+    const cv::Mat expected = misses ? cv::Mat(own.size(), CV_8UC1, cv::Scalar(kUnknown)) : own;
+    EXPECT_EQ(cv::countNonZero(cue(strict.out, i) != expected), 0) << i;
+    EXPECT_EQ(cv::countNonZero(cue(fallback.out, i) != (misses ? cue(cues.out, i) : own)), 0) << i;
+  }
+  EXPECT_GE(missed, 8);  // at least the images with both objects
   // Classifier models and a segmenter together are a configuration error.
   second.colour_model = classifier.model;
   EXPECT_THROW(GenerateCues(second), InputError);
