@@ -169,12 +169,15 @@ class CueWriter {
     internal::MakeFolder(preview_folder_);
   }
 
-  // `cue` at the network's input size; written at entry i's original size.
-  void Write(size_t i, const cv::Mat& cue_small) {
+  // `cue` at the network's input size (or already at the image's); written at entry i's original
+  // size.
+  void Write(size_t i, const cv::Mat& cue_in) {
     const cv::Mat original = cv::imread(list_.entries[i].image, cv::IMREAD_UNCHANGED);
     if (original.empty()) throw InputError("cannot read " + list_.entries[i].image);
-    cv::Mat cue;
-    cv::resize(cue_small, cue, original.size(), 0, 0, cv::INTER_NEAREST);
+    cv::Mat cue = cue_in;
+    if (cue.size() != original.size()) {
+      cv::resize(cue_in, cue, original.size(), 0, 0, cv::INTER_NEAREST);
+    }
     cv::imwrite(fmt::format("{}/{:06d}.png", cue_folder_, i), cue);
     stats_.pixels += cue.total();
     for (int y = 0; y < cue.rows; ++y) {
@@ -254,7 +257,8 @@ bool MissesALabelledClass(const cv::Mat& cue, const std::vector<int>& classes, i
   return false;
 }
 
-// Cue `index` of `folder` resized to `size` (nearest), or all kUnknown without a folder.
+// Cue `index` of `folder` as stored (at the image's original size, so CueWriter::Write keeps it
+// as it is), or all kUnknown of `size` without a folder.
 cv::Mat FallbackCue(const std::string& folder, size_t index, cv::Size size) {
   if (folder.empty()) return cv::Mat(size, CV_8UC1, cv::Scalar(kUnknown));
   const std::string path = fmt::format("{}/cues/{:06d}.png", folder, index);
@@ -262,9 +266,7 @@ cv::Mat FallbackCue(const std::string& folder, size_t index, cv::Size size) {
   if (cue.empty() || cue.type() != CV_8UC1) {
     throw InputError("cues: fallback cue " + path + " is missing or not an 8-bit label image");
   }
-  cv::Mat resized;
-  cv::resize(cue, resized, size, 0, 0, cv::INTER_NEAREST);
-  return resized;
+  return cue;
 }
 
 // The second round (CueGenerationOptions::segmenter_model): cues from a trained segmenter.
@@ -320,18 +322,12 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
     }
     writer.Write(i, cue);
     if (static_cast<int>(i) < options.preview_images) {
-      cv::Mat argmax(sample.image.size(), CV_8UC1);
-      for (int y = 0; y < argmax.rows; ++y) {
-        for (int x = 0; x < argmax.cols; ++x) {
-          int best = 0;
-          for (int c = 1; c < sizes[0]; ++c) {
-            if (planar.at<float>(c, y, x) > planar.at<float>(best, y, x)) best = c;
-          }
-          argmax.at<uint8_t>(y, x) = static_cast<uint8_t>(best);
-        }
-      }
+      const torch::Tensor labels = probabilities.argmax(0).to(torch::kUInt8).contiguous();
+      const cv::Mat argmax(sample.image.size(), CV_8UC1, labels.data_ptr<uint8_t>());
+      cv::Mat shown;
+      cv::resize(cue, shown, sample.image.size(), 0, 0, cv::INTER_NEAREST);
       writer.WritePreview(
-          i, {sample.image, RenderCue(argmax, sample.image), RenderCue(cue, sample.image)},
+          i, {sample.image, RenderCue(argmax, sample.image), RenderCue(shown, sample.image)},
           {"image", "segmenter", "CRF cue"});
     }
     progress.Update(i + 1);
