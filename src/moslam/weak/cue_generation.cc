@@ -301,13 +301,7 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
     const Sample sample = LoadSample(list, static_cast<int>(i), resize, rng, false);
     const torch::Tensor logits = net->forward(ToInputTensor(sample.image).unsqueeze(0)).logits;
     const torch::Tensor probabilities =
-        torch::softmax(
-            torch::nn::functional::interpolate(
-                logits, torch::nn::functional::InterpolateFuncOptions()
-                            .size(std::vector<int64_t>{sample.image.rows, sample.image.cols})
-                            .mode(torch::kBilinear)
-                            .align_corners(false)),
-            1)
+        torch::softmax(internal::UpsampleBilinear(logits, sample.image.rows, sample.image.cols), 1)
             .squeeze(0)
             .to(torch::kFloat32)
             .contiguous();

@@ -95,6 +95,10 @@ namespace moslam::weak::internal {
 // receives the sigmoid class scores when not null.
 cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<float>* scores);
 
+// Bilinear upsampling (align_corners false, as inference does) of N x C x h x w maps to
+// N x C x height x width: the logits and CAMs of every stage go through it.
+torch::Tensor UpsampleBilinear(const torch::Tensor& maps, int64_t height, int64_t width);
+
 // Where training runs: the first CUDA device when libtorch sees one, else the CPU (logged).
 torch::Device TrainingDevice();
 
