@@ -1,5 +1,8 @@
 // End-to-end: stereo SLAM on KITTI 06, frames 0-50 (issue 5's acceptance sequence).
 #include <gtest/gtest.h>
+#ifdef __linux__
+#include <sched.h>
+#endif
 
 #include "moslam/slam/run_dataset.h"
 #include "moslam/testing/shared_data.h"
@@ -40,11 +43,44 @@ TEST(SystemKitti, DeterministicRunsAreIdentical) {
   EXPECT_EQ(a.summary.map_points, b.summary.map_points);
 }
 
+// Threaded runs of the first 20 frames reach 0.018-0.026 m (free-running, whatever the machine's
+// load, thanks to the weak tracker's keyframes; see the next test).
+constexpr double kMaxThreadedAteRmse = 0.05;
+
 TEST(SystemKitti, ThreadedMappingTracksEveryFrame) {
   MOSLAM_SHARED_OR_SKIP(folder, "data/kitti/06_000000-000050");
   const DatasetRun run = RunDataset(folder, "configs/KITTI04-12.yaml", false, 20);
   EXPECT_EQ(run.frames_ok, 20);
-  EXPECT_LT(run.ate_rmse, kMaxAteRmse);
+  EXPECT_LT(run.ate_rmse, kMaxThreadedAteRmse);
+  std::printf("KITTI 06 0-19 threaded: ATE RMSE %.4f m, %d keyframes\n", run.ate_rmse,
+              run.summary.keyframes);
+}
+
+// Local mapping starved of CPU, as on a loaded machine: the whole run on one core with mapping at
+// the lowest priority, so it runs only while tracking waits. Tracking then finds at most three
+// keyframes queued (ORB-SLAM2's limit) and, before the tracker queued a weak frame's keyframe
+// regardless, tracked on a thinning map: 5-6 keyframes instead of 12-13, a few dozen inliers,
+// ATE 0.045-0.18 m (keyframes themselves stayed at 0.015 m). This is what failed CI once.
+TEST(SystemKitti, StarvedMappingStillTracksAccurately) {
+#ifdef __linux__
+  MOSLAM_SHARED_OR_SKIP(folder, "data/kitti/06_000000-000050");
+  cpu_set_t saved;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(saved), &saved), 0);
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(sched_getcpu(), &one);
+  ASSERT_EQ(sched_setaffinity(0, sizeof(one), &one), 0);  // threads started now inherit it
+  const DatasetRun run = RunDataset(folder, "configs/KITTI04-12.yaml", false, 20, "",
+                                    [](SystemOptions* o) { o->background_nice = 19; });
+  ASSERT_EQ(sched_setaffinity(0, sizeof(saved), &saved), 0);
+  EXPECT_EQ(run.frames_ok, 20);
+  EXPECT_GE(run.summary.keyframes, 9);
+  EXPECT_LT(run.ate_rmse, kMaxThreadedAteRmse);
+  std::printf("KITTI 06 0-19 mapping starved: ATE RMSE %.4f m, %d keyframes\n", run.ate_rmse,
+              run.summary.keyframes);
+#else
+  GTEST_SKIP() << "needs Linux (thread affinity and per-thread nice values)";
+#endif
 }
 
 // A frame that cannot be tracked (a black image pair, as from a covered lens) is reported lost

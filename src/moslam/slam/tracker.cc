@@ -484,7 +484,8 @@ bool Tracker::NeedNewKeyFrame() const {
   const double th_ref = num_keyframes < 2 ? 0.4 : (options_.monocular ? 0.9 : 0.75);
   const bool c1a =
       frames_since_keyframe_ >= static_cast<uint64_t>(options_.max_frames_between_keyframes);
-  const bool c1c = !options_.monocular && (last_inliers_ < ref_matches * 0.25 || need_close);
+  const bool weak = last_inliers_ < ref_matches * 0.25 || need_close;
+  const bool c1c = !options_.monocular && weak;
   const bool c2 = (last_inliers_ < ref_matches * th_ref || need_close) && last_inliers_ > 15;
   if (!((c1a || idle || c1c) && c2)) return false;
   if (idle) return true;
@@ -493,6 +494,17 @@ bool Tracker::NeedNewKeyFrame() const {
     // monocular here, which has no other source of new points).
     sink_->InterruptMapping();
     return false;
+  }
+  // Stereo/RGB-D: ORB-SLAM2 queues at most 3 keyframes. When mapping lags further behind (a
+  // loaded machine; frames as fast as tracking takes them) that leaves a weak tracker on a
+  // thinning map: its inliers fall to a few dozen and its poses drift by decimetres while the
+  // keyframes stay accurate. A weak tracker's keyframe goes in regardless; the queue's capacity
+  // bounds it (InsertKeyFrame then blocks tracking until mapping takes one: backpressure, and
+  // mapping gets the CPU it needs). The running local BA is stopped so that happens sooner
+  // (ORB-SLAM2's InterruptBA).
+  if (weak) {
+    sink_->InterruptMapping();
+    return true;
   }
   return sink_->QueuedKeyFrames() < 3;
 }
