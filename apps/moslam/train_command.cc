@@ -120,6 +120,11 @@ void AddTrainCommand(CLI::App& app) {
   q->add_option("--min-class-pixels", cues.min_class_pixels,
                 "with --segmenter: fraction of an image a labelled class must be seeded on")
       ->capture_default_str();
+  q->add_option("--depth-folder", cues.depth_folder,
+                "with --segmenter: 16-bit depth PNGs named as the images (e.g. DATA/depth); the "
+                "CRF adds its depth kernel");
+  q->add_option("--depth-factor", cues.depth_factor, "raw depth units per metre")
+      ->capture_default_str();
   static std::string crf_config;
   q->add_option("--crf-config", crf_config,
                 "with --segmenter: YAML file of crf.* options (default: the CRF's defaults)");

@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "moslam/util/check.h"
 #include "moslam/util/error.h"
 
 namespace moslam::synth {
@@ -185,7 +186,7 @@ TrainingWriter::TrainingWriter(const std::string& folder, const GeneratorOptions
     : folder_(folder),
       png_params_({cv::IMWRITE_PNG_COMPRESSION, options.png_compression}),
       label_min_pixels_(LabelMinPixels(width, height)) {
-  MakeDirs(folder, {"rgb", "eval_only/class", "eval_only/instance"});
+  MakeDirs(folder, {"rgb", "depth", "eval_only/class", "eval_only/instance"});
   labels_ = Open(folder, "labels.txt");
   labels_ << fmt::format(
       "# image-level labels: <image> <classes with at least {} pixels> (background not listed)\n",
@@ -205,6 +206,10 @@ void TrainingWriter::WriteFrame(const FrameData& f) {
     if (!cv::imwrite(path, m, png_params_)) ThrowInput("synth: cannot write {}", path);
   };
   write("rgb/" + stem + ".png", bgr);
+  // The sensor's depth (Kinect noise and holes, factor 5000, as the presets' depth/): data an
+  // RGB-D camera gives with every image, not a label; the CRF of self-training cues may use it.
+  MOSLAM_CHECK(!f.depth.empty()) << "training frames come from an RGB-D camera";
+  write("depth/" + stem + ".png", f.depth);
   write("eval_only/class/" + stem + ".png", f.class_id);
   write("eval_only/instance/" + stem + ".png", f.instance);
   labels_ << Labels("rgb/" + stem + ".png", f, label_min_pixels_);

@@ -293,6 +293,18 @@ TEST(Synth, TrainingModeWritesLabelsAndEvalOnlyMasks) {
     ASSERT_FALSE(cls.empty());
     EXPECT_EQ(std::vector<std::string>(line.begin() + 1, line.end()),
               VisibleClasses(cls, LabelMinPixels(320, 240)));
+    const cv::Mat depth =
+        cv::imread((root / "depth" / fs::path(line[0]).filename()).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(depth.type(), CV_16UC1);
+    EXPECT_EQ(depth.size(), cls.size());
+    // The Kinect model's range (0.5-5 m, on the true depth; disparity quantization moves a
+    // reading at 5 m by up to ~0.1 m) in PNG units of 1/5000 m; rooms of 4-8 m leave far walls
+    // without depth, but never the whole image.
+    EXPECT_GT(cv::countNonZero(depth), static_cast<int>(depth.total() / 10));
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(depth, &lo, &hi, nullptr, nullptr, depth > 0);
+    EXPECT_GE(lo, 0.45 * 5000);
+    EXPECT_LE(hi, 5.25 * 5000);
   }
   // Training frames are not the presets' frames.
   EXPECT_FALSE(fs::exists(root / "rgb.txt"));

@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "moslam/io/image.h"
 #include "moslam/net/model_file.h"
 #include "moslam/util/error.h"
 #include "moslam/util/progress.h"
@@ -209,6 +210,11 @@ class CueWriter {
                              {"images", list_.entries.size()},
                              {"models", models},
                              {"seeded_fraction", stats_.seeded / std::max(1.0, stats_.pixels)}};
+    if (!options_.segmenter_model.empty()) {
+      report["self_training"] = {{"confidence", options_.confidence},
+                                 {"fallback_cues", options_.fallback_cues},
+                                 {"depth_folder", options_.depth_folder}};
+    }
     for (size_t c = 0; c < seg_classes_.size(); ++c) {
       report["class_fraction"][seg_classes_[c]] = class_pixels_[c] / std::max(1.0, stats_.pixels);
     }
@@ -269,8 +275,28 @@ cv::Mat FallbackCue(const std::string& folder, size_t index, cv::Size size) {
   return cue;
 }
 
+// The image's depth (CueGenerationOptions::depth_folder) in metres at `size` (the cue's, which
+// is the network input's): nearest neighbour, so no reading is averaged across a depth edge or
+// with a hole.
+cv::Mat DepthOf(const ImageListEntry& entry, const CueGenerationOptions& options, cv::Size size) {
+  const std::string path =
+      (fs::path(options.depth_folder) / fs::path(entry.image).filename()).string();
+  if (!fs::exists(path)) {
+    throw InputError(fmt::format("cues: no depth image {} for {} (--depth-folder {})", path,
+                                 entry.image, options.depth_folder));
+  }
+  const cv::Mat depth = io::LoadDepthImage(path, options.depth_factor);
+  cv::Mat resized;
+  cv::resize(depth, resized, size, 0, 0, cv::INTER_NEAREST);
+  return resized;
+}
+
 // The second round (CueGenerationOptions::segmenter_model): cues from a trained segmenter.
 void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
+  if (!options.depth_folder.empty() && !(options.depth_factor > 0.0)) {
+    throw InputError(fmt::format("cues: depth_factor must be > 0 (raw units per metre), got {}",
+                                 options.depth_factor));
+  }
   if (!(options.min_class_pixels >= 0.0f && options.min_class_pixels < 1.0f)) {
     throw InputError(
         fmt::format("cues: min_class_pixels must be in [0, 1), got {}", options.min_class_pixels));
@@ -290,7 +316,7 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
   resize.output_width = net->config().input_width;
   resize.output_height = net->config().input_height;
   semantic::DenseCrfOptions crf_options = options.crf;
-  crf_options.depth = false;
+  crf_options.depth = !options.depth_folder.empty();
   crf_options.num_threads = std::max(1, options.threads);
   semantic::DenseCrf crf(crf_options);
   CueWriter writer(options, list, seg_classes);
@@ -308,8 +334,11 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
     const int sizes[] = {static_cast<int>(probabilities.size(0)), sample.image.rows,
                          sample.image.cols};
     const cv::Mat planar(3, sizes, CV_32F, probabilities.data_ptr<float>());
-    cv::Mat cue = CuesFromSegmentation(planar, sample.classes, background, sample.image, crf,
-                                       options.confidence);
+    const cv::Mat depth_m = options.depth_folder.empty()
+                                ? cv::Mat()
+                                : DepthOf(list.entries[i], options, sample.image.size());
+    cv::Mat cue = CuesFromSegmentation(planar, sample.classes, background, sample.image, depth_m,
+                                       crf, options.confidence);
     if (MissesALabelledClass(cue, sample.classes, background, options.min_class_pixels)) {
       ++missed;
       cue = FallbackCue(options.fallback_cues, i, cue.size());
@@ -345,6 +374,9 @@ void GenerateCues(const CueGenerationOptions& options) {
     }
     GenerateCuesFromSegmenter(options);
     return;
+  }
+  if (!options.depth_folder.empty()) {
+    throw InputError("cues: --depth-folder is for self-training cues (--segmenter) only");
   }
   const ImageList list = TrainingList(options);
   const std::vector<std::string> classifier_classes =

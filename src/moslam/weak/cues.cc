@@ -202,8 +202,8 @@ cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey, bool one_sided) {
 }
 
 cv::Mat CuesFromSegmentation(const cv::Mat& probabilities, const std::vector<int>& present,
-                             int background, const cv::Mat& image, semantic::DenseCrf& crf,
-                             float confidence) {
+                             int background, const cv::Mat& image, const cv::Mat& depth_m,
+                             semantic::DenseCrf& crf, float confidence) {
   if (probabilities.dims != 3 || probabilities.type() != CV_32F || !probabilities.isContinuous()) {
     ThrowInput(
         "CuesFromSegmentation: probabilities must be a continuous {{C, H, W}} CV_32F matrix");
@@ -234,7 +234,7 @@ cv::Mat CuesFromSegmentation(const cv::Mat& probabilities, const std::vector<int
     if (!keep[c]) semantic::LabelPlane(unaries, c).setTo(0.0f);
   }
   const semantic::CrfResult result =
-      crf.Infer(image, cv::Mat(), semantic::Unaries::FromProbabilities(unaries));
+      crf.Infer(image, depth_m, semantic::Unaries::FromProbabilities(unaries));
   cv::Mat cues(image.size(), CV_8UC1, cv::Scalar(kUnknown));
   for (int y = 0; y < image.rows; ++y) {
     const unsigned char* label = result.labels.ptr<unsigned char>(y);

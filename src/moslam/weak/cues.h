@@ -63,9 +63,11 @@ cv::Mat FuseCues(const cv::Mat& colour, const cv::Mat& grey, bool one_sided = tr
 // image's edges where the network's upsampled output is blurry). A pixel takes the CRF's label
 // when its marginal is at least `confidence`, else kUnknown. No pixel label is involved: the
 // image-level labels and the image are all it uses, as in the first round.
+// `depth_m` (CV_32F metres, the image's size, 0 = no reading) is required when the CRF has its
+// depth kernel (DenseCrfOptions::depth), else ignored and may be empty.
 cv::Mat CuesFromSegmentation(const cv::Mat& probabilities, const std::vector<int>& present,
-                             int background, const cv::Mat& image, semantic::DenseCrf& crf,
-                             float confidence);
+                             int background, const cv::Mat& image, const cv::Mat& depth_m,
+                             semantic::DenseCrf& crf, float confidence);
 
 // Pseudo-colour rendering for inspection: each class a fixed colour, unknown black, blended over
 // the image (CV_8UC3 output of the image's size).

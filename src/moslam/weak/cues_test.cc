@@ -200,12 +200,10 @@ TEST(Cues, FusionKeepsAgreementAndOneSidedCuesAndDropsConflicts) {
   EXPECT_EQ(cv::countNonZero(agreed != expected_agreed), 0);
 }
 
-// The self-training round's cues: a segmenter's blurry disc (its probability falls off 8 px
-// beyond the disc's edge, as bilinearly upsampled stride-16 logits do), a class the image-level
-// labels do not list, and a flat region where the network is undecided.
-TEST(Cues, SegmentationCuesFollowTheImageAndTheImageLevelLabels) {
-  const cv::Mat image = DiscImage();
-  // Classes: 0 the disc's, 1 absent from the labels, 2 background.
+// A segmenter's blurry disc: its probability falls off 8 px beyond the disc's edge, as bilinearly
+// upsampled stride-16 logits do. Classes: 0 the disc's, 1 absent from the image-level labels (the
+// network's favourite in the bottom-left corner), 2 background.
+cv::Mat BlurryDiscProbabilities() {
   const int sizes[] = {3, kSide, kSide};
   cv::Mat probabilities(3, sizes, CV_32F);
   for (int y = 0; y < kSide; ++y) {
@@ -214,7 +212,7 @@ TEST(Cues, SegmentationCuesFollowTheImageAndTheImageLevelLabels) {
       // Disc probability 0.9 inside, 0.85 up to 8 px outside, then 0.1.
       float p0 = d <= 0.0f ? 0.9f : (d <= 8.0f ? 0.85f : 0.1f);
       float p1 = 0.0f;
-      if (y >= 110 && x < 40) {  // the absent class is the network's favourite here
+      if (y >= 110 && x < 40) {
         p1 = 0.8f;
         p0 = 0.05f;
       }
@@ -223,39 +221,92 @@ TEST(Cues, SegmentationCuesFollowTheImageAndTheImageLevelLabels) {
       probabilities.at<float>(2, y, x) = 1.0f - p0 - p1;
     }
   }
-  semantic::DenseCrfOptions crf_options;
-  crf_options.num_threads = 1;
-  semantic::DenseCrf crf(crf_options);
-  const cv::Mat cues = CuesFromSegmentation(probabilities, {0}, 2, image, crf, 0.8f);
-  ASSERT_EQ(cues.size(), image.size());
-  int spill = 0, spill_pixels = 0, inside = 0, inside_pixels = 0;
+  return probabilities;
+}
+
+struct DiscCount {
+  int spill = 0, spill_pixels = 0;    // disc cues 2-8 px outside the disc
+  int inside = 0, inside_pixels = 0;  // disc cues more than 2 px inside
+  int ring_background = 0;            // background cues 2-8 px outside
+};
+
+DiscCount CountDiscCues(const cv::Mat& cues) {
+  DiscCount n;
   for (int y = 0; y < kSide; ++y) {
     for (int x = 0; x < kSide; ++x) {
       const int c = cues.at<uchar>(y, x);
       EXPECT_NE(c, 1) << "absent class at " << x << "," << y;
       const float d = std::hypot(x - kCentre.x, y - kCentre.y) - kRadius;
       if (d > 2.0f && d <= 8.0f) {
-        ++spill_pixels;
-        spill += c == 0;
+        ++n.spill_pixels;
+        n.spill += c == 0;
+        n.ring_background += c == 2;
       } else if (d < -2.0f) {
-        ++inside_pixels;
-        inside += c == 0;
+        ++n.inside_pixels;
+        n.inside += c == 0;
       }
     }
   }
+  return n;
+}
+
+// The self-training round's cues: the blurry disc, a class the image-level labels do not list,
+// and a flat region where the network is undecided.
+TEST(Cues, SegmentationCuesFollowTheImageAndTheImageLevelLabels) {
+  const cv::Mat image = DiscImage();
+  const cv::Mat probabilities = BlurryDiscProbabilities();
+  semantic::DenseCrfOptions crf_options;
+  crf_options.num_threads = 1;
+  semantic::DenseCrf crf(crf_options);
+  const cv::Mat cues = CuesFromSegmentation(probabilities, {0}, 2, image, cv::Mat(), crf, 0.8f);
+  ASSERT_EQ(cues.size(), image.size());
+  const DiscCount n = CountDiscCues(cues);
   // The network's confident spill ring (0.85 for the disc) does not become disc cues: the CRF
   // follows the colour edge. Inside, the disc is seeded.
-  EXPECT_LT(spill, spill_pixels / 20) << spill << " of " << spill_pixels;
-  EXPECT_GT(inside, inside_pixels * 9 / 10) << inside << " of " << inside_pixels;
+  EXPECT_LT(n.spill, n.spill_pixels / 20) << n.spill << " of " << n.spill_pixels;
+  EXPECT_GT(n.inside, n.inside_pixels * 9 / 10) << n.inside << " of " << n.inside_pixels;
   // Where the absent class was favoured, the background takes over.
   EXPECT_EQ(cues.at<uchar>(120, 20), 2);
   // A higher confidence keeps a strict subset of the seeds, with the same labels.
-  const cv::Mat strict = CuesFromSegmentation(probabilities, {0}, 2, image, crf, 1.0f);
+  const cv::Mat strict = CuesFromSegmentation(probabilities, {0}, 2, image, cv::Mat(), crf, 1.0f);
   const int kept = cv::countNonZero(strict != kUnknown);
   EXPECT_LT(kept, cv::countNonZero(cues != kUnknown));
   EXPECT_EQ(cv::countNonZero((strict != kUnknown) & (strict != cues)), 0);
-  EXPECT_THROW(CuesFromSegmentation(probabilities, {3}, 2, image, crf, 0.8f), InputError);
-  EXPECT_THROW(CuesFromSegmentation(probabilities, {0}, 2, image, crf, 0.0f), InputError);
+  EXPECT_THROW(CuesFromSegmentation(probabilities, {3}, 2, image, cv::Mat(), crf, 0.8f),
+               InputError);
+  EXPECT_THROW(CuesFromSegmentation(probabilities, {0}, 2, image, cv::Mat(), crf, 0.0f),
+               InputError);
+}
+
+// With depth (an RGB-D training set), the CRF's depth kernel finds the edge colour does not
+// show: a disc 2 m in front of the wall, both the same grey.
+TEST(Cues, SegmentationCuesFollowDepthWhereColourHasNoEdge) {
+  const cv::Mat image(kSide, kSide, CV_8UC3, cv::Scalar(120, 120, 120));
+  cv::Mat depth(kSide, kSide, CV_32FC1, cv::Scalar(3.0f));
+  cv::circle(depth, kCentre, static_cast<int>(kRadius), cv::Scalar(1.0f), cv::FILLED);
+  depth(cv::Rect(0, 0, 8, 8)).setTo(0.0f);  // holes take no part in the depth kernel
+  const cv::Mat probabilities = BlurryDiscProbabilities();
+  semantic::DenseCrfOptions colour_options;
+  colour_options.num_threads = 1;
+  semantic::DenseCrf colour_crf(colour_options);
+  const DiscCount colour = CountDiscCues(
+      CuesFromSegmentation(probabilities, {0}, 2, image, cv::Mat(), colour_crf, 0.8f));
+  // Colour alone has no edge to hold the disc: the wide appearance kernel (80 px) spreads the
+  // background over it.
+  EXPECT_LT(colour.inside, colour.inside_pixels / 10)
+      << colour.inside << " of " << colour.inside_pixels;
+  semantic::DenseCrfOptions depth_options = colour_options;
+  depth_options.depth = true;
+  semantic::DenseCrf depth_crf(depth_options);
+  const DiscCount with_depth =
+      CountDiscCues(CuesFromSegmentation(probabilities, {0}, 2, image, depth, depth_crf, 0.8f));
+  EXPECT_LT(with_depth.spill, with_depth.spill_pixels / 20)
+      << with_depth.spill << " of " << with_depth.spill_pixels;
+  EXPECT_GT(with_depth.inside, with_depth.inside_pixels * 9 / 10);
+  EXPECT_GT(with_depth.ring_background, with_depth.spill_pixels / 2);
+  // The depth kernel needs the depth.
+  EXPECT_THROW(CuesFromSegmentation(probabilities, {0}, 2, image, cv::Mat(), depth_crf, 0.8f),
+               InputError);
 }
 
 TEST(Cues, OptionsCheckNamesTheField) {

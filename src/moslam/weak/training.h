@@ -94,6 +94,13 @@ struct CueGenerationOptions {
   // cue at all (every pixel kUnknown).
   std::string fallback_cues;
   float min_class_pixels = 0.001f;
+  // Self-training on RGB-D data: a folder of 16-bit depth PNGs named as the images (a `moslam
+  // synth --train` folder's depth/), `depth_factor` raw units per metre. When set, the CRF gets
+  // its depth kernel (crf.depth_* options; the paper's "c,d" with the colour kernel on): people
+  // stand apart from the floor and walls in depth where colour may not separate them. Depth is
+  // sensor data that comes with every image, not a label.
+  std::string depth_folder;
+  double depth_factor = 5000.0;
 };
 
 struct SegmenterTrainOptions {

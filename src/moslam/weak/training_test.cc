@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "moslam/net/model_file.h"
+#include "moslam/testing/error_of.h"
 #include "moslam/testing/shared_data.h"
 #include "moslam/util/error.h"
 #include "moslam/weak/training.h"
@@ -237,7 +238,33 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
     EXPECT_EQ(cv::countNonZero(cue(fallback.out, i) != (misses ? cue(cues.out, i) : own)), 0) << i;
   }
   EXPECT_GE(missed, 8);  // at least the images with both objects
-  // Classifier models and a segmenter together are a configuration error.
+  // RGB-D data: the CRF adds its depth kernel (objects 1 m in front of a background at 3 m, in
+  // 16-bit PNGs of 1/5000 m named as the images).
+  fs::create_directories(data_ + "/depth");
+  for (size_t i = 0; i < toys_.size(); ++i) {
+    const std::string name = fmt::format("{:03d}.png", i);
+    const cv::Mat labels = cv::imread(data_ + "/labels/" + name, cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(labels.empty()) << name;
+    cv::Mat depth(labels.size(), CV_16UC1, cv::Scalar(15000));
+    depth.setTo(5000, labels > 0);
+    cv::imwrite(data_ + "/depth/" + name, depth);
+  }
+  CueGenerationOptions with_depth = second;
+  with_depth.out = dir_.path() + "/cues5";
+  with_depth.depth_folder = data_ + "/depth";
+  GenerateCues(with_depth);
+  const nlohmann::json report5 =
+      nlohmann::json::parse(std::ifstream(with_depth.out + "/cues.json"));
+  EXPECT_EQ(report5["self_training"]["depth_folder"], with_depth.depth_folder);
+  EXPECT_GT(report5["class_fraction"]["square"].get<double>(), 0.0);
+  EXPECT_GT(report5["class_fraction"]["disc"].get<double>(), 0.0);
+  fs::remove(data_ + "/depth/003.png");
+  EXPECT_THAT(testing::ErrorOf([&] { GenerateCues(with_depth); }),
+              ::testing::HasSubstr("depth/003.png"));
+  // Depth is for self-training cues; classifier models and a segmenter together are an error.
+  with_depth.segmenter_model.clear();
+  with_depth.colour_model = classifier.model;
+  EXPECT_THROW(GenerateCues(with_depth), InputError);
   second.colour_model = classifier.model;
   EXPECT_THROW(GenerateCues(second), InputError);
 }
