@@ -125,6 +125,12 @@ void AddTrainCommand(CLI::App& app) {
                 "CRF adds its depth kernel");
   q->add_option("--depth-factor", cues.depth_factor, "raw depth units per metre")
       ->capture_default_str();
+  q->add_option("--scales", cues.scales,
+                "with --segmenter: mean softmax over the image resized by these factors (e.g. "
+                "1,1.5,2)")
+      ->delimiter(',')
+      ->capture_default_str();
+  q->add_flag("--flip", cues.flip, "with --segmenter: also average the mirrored images");
   static std::string crf_config;
   q->add_option("--crf-config", crf_config,
                 "with --segmenter: YAML file of crf.* options (default: the CRF's defaults)");
@@ -150,6 +156,12 @@ void AddTrainCommand(CLI::App& app) {
                 "chance that a training image is made grey")
       ->capture_default_str();
   s->add_option("--head-channels", segmenter.net.head_channels, "ASPP channels")
+      ->capture_default_str();
+  s->add_option("--decoder-block", segmenter.net.decoder_block,
+                "DeepLabV3+ decoder on this backbone block's features (3: logits at stride 4; "
+                "0: none)")
+      ->capture_default_str();
+  s->add_option("--decoder-channels", segmenter.net.decoder_channels, "decoder channels")
       ->capture_default_str();
   s->add_option("--loss-stride", segmenter.loss_stride,
                 "losses on logits upsampled to input/N (0: the network's output stride)")

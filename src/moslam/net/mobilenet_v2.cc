@@ -11,6 +11,7 @@
 #include <torch/script.h>
 
 #include "moslam/semantic/model_card.h"
+#include "moslam/util/check.h"
 #include "moslam/util/error.h"
 
 namespace moslam::net {
@@ -65,17 +66,6 @@ torch::nn::Conv2d MakeConv(int in, int out, int kernel, int stride, int dilation
                                .bias(true));
 }
 
-// A 1x1 convolution as one matrix product on the NHWC layout (no copy when x is channels-last).
-// libtorch 1.13 sends single-threaded 1x1 convs to its slow im2col path, which also converts
-// layouts back and forth; the GEMM is the same arithmetic without those copies.
-torch::Tensor Pointwise(const torch::Tensor& x, const torch::Tensor& weight,
-                        const torch::Tensor& bias) {
-  const int64_t n = x.size(0), c = x.size(1), h = x.size(2), w = x.size(3);
-  const torch::Tensor rows = x.permute({0, 2, 3, 1}).reshape({n * h * w, c});
-  const torch::Tensor y = torch::addmm(bias, rows, weight.view({weight.size(0), c}).t());
-  return y.view({n, h, w, weight.size(0)}).permute({0, 3, 1, 2});
-}
-
 // One torchvision block with BatchNorm folded into conv biases. Convs are registered as c0, c1,
 // c2 in forward order; TorchvisionNames() says where each one's weights live in torchvision.
 class BlockImpl : public torch::nn::Module {
@@ -100,8 +90,7 @@ class BlockImpl : public torch::nn::Module {
     torch::Tensor y = x;
     for (size_t i = 0; i < convs_.size(); ++i) {
       torch::nn::Conv2d& conv = convs_[i];
-      y = conv->options.kernel_size()->at(0) == 1 ? Pointwise(y, conv->weight, conv->bias)
-                                                  : conv->forward(y);
+      y = ApplyConv(*conv, y);
       if (relu_[i]) y = torch::hardtanh_(y, 0.0, 6.0);  // ReLU6; autograd keeps the result
     }
     return residual_ ? y + x : y;
@@ -153,6 +142,24 @@ void CheckShape(const torch::Tensor& tensor, at::IntArrayRef expected, const std
 }
 
 }  // namespace
+
+// libtorch 1.13 sends single-threaded 1x1 convs to its slow im2col path, which also converts
+// layouts back and forth; the GEMM is the same arithmetic without those copies.
+torch::Tensor Pointwise(const torch::Tensor& x, const torch::Tensor& weight,
+                        const torch::Tensor& bias) {
+  const int64_t n = x.size(0), c = x.size(1), h = x.size(2), w = x.size(3);
+  const torch::Tensor rows = x.permute({0, 2, 3, 1}).reshape({n * h * w, c});
+  const torch::Tensor y = torch::addmm(bias, rows, weight.view({weight.size(0), c}).t());
+  return y.view({n, h, w, weight.size(0)}).permute({0, 3, 1, 2});
+}
+
+torch::Tensor ApplyConv(torch::nn::Conv2dImpl& conv, const torch::Tensor& x) {
+  const auto& o = conv.options;
+  const bool pointwise = o.kernel_size()->at(0) == 1 && o.kernel_size()->at(1) == 1 &&
+                         o.stride()->at(0) == 1 && o.stride()->at(1) == 1 && o.groups() == 1 &&
+                         conv.bias.defined();
+  return pointwise ? Pointwise(x, conv.weight, conv.bias) : conv.forward(x);
+}
 
 void BackboneOptions::Check() const {
   if (last_block < 1 || last_block > 18) {
@@ -213,6 +220,19 @@ torch::Tensor MobileNetV2Impl::forward(torch::Tensor x) {
     ThrowInput("MobileNetV2 wants N x 3 x H x W input (got {} dimensions)", x.dim());
   }
   return blocks_->forward(x.contiguous(torch::MemoryFormat::ChannelsLast));
+}
+
+torch::Tensor MobileNetV2Impl::forward(torch::Tensor x, int tap, torch::Tensor* tapped) {
+  if (x.dim() != 4 || x.size(1) != 3) {
+    ThrowInput("MobileNetV2 wants N x 3 x H x W input (got {} dimensions)", x.dim());
+  }
+  MOSLAM_CHECK(tap >= 0 && tap <= options_.last_block && tapped != nullptr);
+  torch::Tensor y = x.contiguous(torch::MemoryFormat::ChannelsLast);
+  for (size_t i = 0; i < blocks_->size(); ++i) {
+    y = blocks_->ptr(i)->as<BlockImpl>()->forward(y);
+    if (static_cast<int>(i) == tap) *tapped = y;
+  }
+  return y;
 }
 
 int MobileNetV2Impl::out_channels() const { return BlockChannels(options_.last_block); }

@@ -77,6 +77,23 @@ TEST(ModelFile, SegmenterRoundTrip) {
   EXPECT_LT(MaxRelativeDifference(h.class_logits, expected.class_logits), 1e-2);
 }
 
+TEST(ModelFile, SegmenterWithDecoderRoundTrips) {
+  testing::TempDir dir;
+  NetConfig config = SmallConfig(NetKind::kSegmenter);
+  config.decoder_block = 3;
+  config.decoder_channels = 6;
+  SegmenterNet net(config);
+  const std::string path = dir.path() + "/d.mnet";
+  SaveSegmenter(path, net);
+  SegmenterNet loaded = LoadSegmenter(path);
+  EXPECT_EQ(loaded->config().decoder_block, 3);
+  EXPECT_EQ(loaded->config().decoder_channels, 6);
+  torch::NoGradGuard no_grad;
+  const torch::Tensor expected = net->forward(Input()).logits;
+  EXPECT_EQ(expected.size(2), 8);  // stride 4 of 32 rows
+  EXPECT_TRUE(torch::equal(loaded->forward(Input()).logits, expected));
+}
+
 TEST(ModelFile, WrongKindMissingFileAndGarbageAreInputErrors) {
   testing::TempDir dir;
   ClassifierNet classifier(SmallConfig(NetKind::kClassifier));

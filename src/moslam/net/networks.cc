@@ -25,12 +25,12 @@ bool Contains(const std::vector<std::string>& names, const std::string& name) {
   return std::find(names.begin(), names.end(), name) != names.end();
 }
 
-// Every key of `json` must be in `keys` and every one of `keys` must be present.
+// Every key of `json` must be in `keys` or `optional` and every one of `keys` must be present.
 void CheckKeys(const nlohmann::json& json, const std::set<std::string>& keys,
-               const std::string& where) {
+               const std::string& where, const std::set<std::string>& optional = {}) {
   if (!json.is_object()) ThrowInput("net config: {} must be a JSON object", where);
   for (const auto& item : json.items()) {
-    if (keys.count(item.key()) == 0)
+    if (keys.count(item.key()) == 0 && optional.count(item.key()) == 0)
       ThrowInput("net config: unknown key '{}' in {}", item.key(), where);
   }
   for (const std::string& key : keys) {
@@ -68,6 +68,13 @@ void InitClassConv(torch::nn::Conv2d& conv) {
   conv->bias.zero_();
 }
 
+torch::nn::Conv2dImpl& ConvAt(torch::nn::SequentialImpl& sequential, size_t i) {
+  return *sequential.ptr(i)->as<torch::nn::Conv2dImpl>();
+}
+torch::nn::Conv2dImpl& ConvAt(torch::nn::Sequential& sequential, size_t i) {
+  return ConvAt(*sequential, i);
+}
+
 }  // namespace
 
 void NetConfig::Check() const {
@@ -85,6 +92,18 @@ void NetConfig::Check() const {
     ThrowInput("net config: head_channels must be >= 1 (is {})", head_channels);
   for (int d : head_dilations) {
     if (d < 1) ThrowInput("net config: head_dilations must be >= 1 (has {})", d);
+  }
+  if (decoder_block != 0) {
+    if (decoder_block < 1 || decoder_block >= backbone.last_block ||
+        BlockStride(decoder_block) >=
+            std::min(backbone.output_stride, BlockStride(backbone.last_block))) {
+      ThrowInput(
+          "net config: decoder_block must be 0 (none) or a backbone block before last_block {} "
+          "with a finer stride than the backbone's output (is {})",
+          backbone.last_block, decoder_block);
+    }
+    if (decoder_channels < 1)
+      ThrowInput("net config: decoder_channels must be >= 1 (is {})", decoder_channels);
   }
   if (input_width < 32 || input_height < 32) {
     ThrowInput("net config: input_width and input_height must be >= 32 pixels (are {} x {})",
@@ -109,6 +128,10 @@ nlohmann::json ToJson(const NetConfig& config) {
                       {"frozen_blocks", config.backbone.frozen_blocks}};
   json["head_channels"] = config.head_channels;
   json["head_dilations"] = config.head_dilations;
+  // Written only when present, so that files of decoder-less networks stay as they were.
+  if (config.decoder_block != 0) {
+    json["decoder"] = {{"block", config.decoder_block}, {"channels", config.decoder_channels}};
+  }
   json["input_width"] = config.input_width;
   json["input_height"] = config.input_height;
   json["grey"] = config.grey;
@@ -119,7 +142,7 @@ NetConfig NetConfigFromJson(const nlohmann::json& json) {
   CheckKeys(json,
             {"kind", "classes", "movable", "background", "backbone", "head_channels",
              "head_dilations", "input_width", "input_height", "grey"},
-            "the config");
+            "the config", {"decoder"});
   NetConfig config;
   config.kind = KindFromName(Get<std::string>(json, "kind"));
   config.classes = Get<std::vector<std::string>>(json, "classes");
@@ -132,6 +155,12 @@ NetConfig NetConfigFromJson(const nlohmann::json& json) {
   config.backbone.frozen_blocks = Get<int>(backbone, "frozen_blocks");
   config.head_channels = Get<int>(json, "head_channels");
   config.head_dilations = Get<std::vector<int>>(json, "head_dilations");
+  if (json.contains("decoder")) {
+    const nlohmann::json& decoder = json.at("decoder");
+    CheckKeys(decoder, {"block", "channels"}, "decoder");
+    config.decoder_block = Get<int>(decoder, "block");
+    config.decoder_channels = Get<int>(decoder, "channels");
+  }
   config.input_width = Get<int>(json, "input_width");
   config.input_height = Get<int>(json, "input_height");
   config.grey = Get<bool>(json, "grey");
@@ -177,7 +206,25 @@ SegmenterNetImpl::SegmenterNetImpl(const NetConfig& config) : config_(config) {
   torch::nn::Conv2d project = Conv(branches * hc, hc, 1);
   InitReluConv(project);
   project_ = register_module("project", torch::nn::Sequential(project, torch::nn::ReLU()));
-  classify_ = register_module("classify", Conv(hc, classes, 1));
+  int classify_in = hc;
+  if (config_.decoder_block > 0) {
+    constexpr int kLowLevelChannels = 32;
+    torch::nn::Conv2d low = Conv(BlockChannels(config_.decoder_block), kLowLevelChannels, 1);
+    InitReluConv(low);
+    low_level_ = register_module("low_level", torch::nn::Sequential(low, torch::nn::ReLU()));
+    // Depthwise-separable (as MobileNet's own blocks): a full 3x3 conv at stride 4 would cost
+    // more than the whole backbone.
+    const int cat = hc + kLowLevelChannels, dc = config_.decoder_channels;
+    torch::nn::Conv2d depthwise(
+        torch::nn::Conv2dOptions(cat, cat, 3).padding(1).groups(cat).bias(true));
+    InitReluConv(depthwise);
+    torch::nn::Conv2d pointwise = Conv(cat, dc, 1);
+    InitReluConv(pointwise);
+    decoder_ = register_module("decoder", torch::nn::Sequential(depthwise, torch::nn::ReLU(),
+                                                                pointwise, torch::nn::ReLU()));
+    classify_in = dc;
+  }
+  classify_ = register_module("classify", Conv(classify_in, classes, 1));
   InitClassConv(classify_);
   aux_class_map_ = register_module("aux_class_map", Conv(in, classes, 1));
   InitClassConv(aux_class_map_);
@@ -185,18 +232,38 @@ SegmenterNetImpl::SegmenterNetImpl(const NetConfig& config) : config_(config) {
 }
 
 SegmenterOutput SegmenterNetImpl::forward(torch::Tensor x) {
-  const torch::Tensor features = backbone_->forward(x);
+  torch::Tensor low_level;
+  const torch::Tensor features = config_.decoder_block > 0
+                                     ? backbone_->forward(x, config_.decoder_block, &low_level)
+                                     : backbone_->forward(x);
   std::vector<torch::Tensor> branches;
   branches.reserve(aspp_->size() + 1);
+  // The 1x1 convs go through ApplyConv (a GEMM; libtorch's own 1x1 conv is 3x slower on one
+  // thread). Module layout as before, so older model files load unchanged.
   for (const auto& branch : *aspp_) {
-    branches.push_back(branch->as<torch::nn::Sequential>()->forward(features));
+    branches.push_back(
+        torch::relu(ApplyConv(ConvAt(*branch->as<torch::nn::Sequential>(), 0), features)));
   }
   // Image pooling: one vector per image, broadcast over the map.
   branches.push_back(image_pool_->forward(features).expand(
       {features.size(0), config_.head_channels, features.size(2), features.size(3)}));
   SegmenterOutput out;
-  out.logits = classify_->forward(project_->forward(torch::cat(branches, 1)));
-  out.class_logits = aux_class_map_->forward(features).mean({2, 3});
+  torch::Tensor head = torch::relu(ApplyConv(ConvAt(project_, 0), torch::cat(branches, 1)));
+  if (config_.decoder_block > 0) {
+    head = torch::nn::functional::interpolate(
+        head, torch::nn::functional::InterpolateFuncOptions()
+                  .size(std::vector<int64_t>{low_level.size(2), low_level.size(3)})
+                  .mode(torch::kBilinear)
+                  .align_corners(false));
+    const torch::Tensor low = torch::relu(ApplyConv(ConvAt(low_level_, 0), low_level));
+    // Depthwise convs are ~20x faster on the channels-last layout; cat may not keep it.
+    const torch::Tensor both =
+        torch::cat({head, low}, 1).contiguous(torch::MemoryFormat::ChannelsLast);
+    head = torch::relu(ConvAt(decoder_, 0).forward(both));
+    head = torch::relu(ApplyConv(ConvAt(decoder_, 2), head));
+  }
+  out.logits = ApplyConv(*classify_, head);
+  out.class_logits = ApplyConv(*aux_class_map_, features).mean({2, 3});
   return out;
 }
 

@@ -37,6 +37,15 @@ struct NetConfig {
   // plus a 1x1 branch and image pooling, `head_channels` each, then a 1x1 conv to the classes.
   int head_channels = 96;
   std::vector<int> head_dilations = {2, 4, 6};
+  // Optional decoder (DeepLabV3+, Chen et al. 2018): the head's output, bilinearly upsampled to
+  // the resolution of backbone block `decoder_block`, is concatenated with that block's features
+  // (projected to 32 channels) and refined by a depthwise-separable 3x3 conv with
+  // `decoder_channels` outputs before the class conv, so the logits come at that block's stride
+  // (block 3: stride 4) and small objects keep their outline, which bilinear upsampling of
+  // stride-16 logits cannot give (on the synthetic held-out frames, even perfect stride-16 logits
+  // reach a person IoU of only 0.85). 0: no decoder, logits at the backbone's output stride.
+  int decoder_block = 0;
+  int decoder_channels = 64;
   // Input: images are resized to input_width x input_height (pixels) and given as RGB in
   // [-1, 1]; grey networks get the grey image in all three channels.
   int input_width = 320;
@@ -74,6 +83,7 @@ TORCH_MODULE(ClassifierNet);
 
 struct SegmenterOutput {
   torch::Tensor logits;        // N x C x h x w per-pixel class scores at the backbone's stride
+                               // (the decoder block's stride with a decoder)
   torch::Tensor class_logits;  // N x C image-level scores (an auxiliary classifier on the same
                                // backbone: what test-time suppression reads, at no extra cost)
 };
@@ -91,6 +101,10 @@ class SegmenterNetImpl : public torch::nn::Module {
   torch::nn::ModuleList aspp_{nullptr};
   torch::nn::Sequential image_pool_{nullptr};
   torch::nn::Sequential project_{nullptr};
+  // Decoder (NetConfig::decoder_block): block features -> 32 channels (conv, ReLU); a depthwise
+  // 3x3 and a pointwise conv on [upsampled head, low-level] (conv, ReLU, conv, ReLU).
+  torch::nn::Sequential low_level_{nullptr};
+  torch::nn::Sequential decoder_{nullptr};
   torch::nn::Conv2d classify_{nullptr};
   torch::nn::Conv2d aux_class_map_{nullptr};
 };

@@ -51,6 +51,21 @@ TEST(NetConfig, JsonRoundTrip) {
   EXPECT_EQ(back.BackgroundIndex(), 0);
 }
 
+TEST(NetConfig, DecoderRoundTripsAndOldConfigsStayAsTheyWere) {
+  NetConfig config = SmallConfig(NetKind::kSegmenter);
+  EXPECT_FALSE(ToJson(config).contains("decoder"));  // files of decoder-less nets unchanged
+  config.decoder_block = 3;
+  config.decoder_channels = 12;
+  const nlohmann::json json = ToJson(config);
+  ASSERT_TRUE(json.contains("decoder"));
+  const NetConfig back = NetConfigFromJson(json);
+  EXPECT_EQ(back.decoder_block, 3);
+  EXPECT_EQ(back.decoder_channels, 12);
+  nlohmann::json bad = json;
+  bad["decoder"]["chanels"] = 3;
+  EXPECT_THAT(ErrorOf([&] { NetConfigFromJson(bad); }), HasSubstr("'chanels'"));
+}
+
 TEST(NetConfig, UnknownMissingAndBadKeysAreNamed) {
   nlohmann::json json = ToJson(SmallConfig(NetKind::kClassifier));
   json["head_channel"] = 3;
@@ -85,6 +100,14 @@ TEST(NetConfig, CheckNamesTheField) {
   config = SmallConfig(NetKind::kClassifier);
   config.backbone.output_stride = 32;
   EXPECT_THAT(ErrorOf([&] { config.Check(); }), HasSubstr("output_stride"));
+  config = SmallConfig(NetKind::kSegmenter);
+  config.decoder_block = 6;  // stride 8: no finer than the backbone's output
+  EXPECT_THAT(ErrorOf([&] { config.Check(); }), HasSubstr("decoder_block"));
+  config.decoder_block = -1;
+  EXPECT_THAT(ErrorOf([&] { config.Check(); }), HasSubstr("decoder_block"));
+  config.decoder_block = 3;
+  config.decoder_channels = 0;
+  EXPECT_THAT(ErrorOf([&] { config.Check(); }), HasSubstr("decoder_channels"));
   config = SmallConfig(NetKind::kClassifier);
   config.background.clear();
   EXPECT_EQ(config.BackgroundIndex(), -1);
@@ -112,6 +135,54 @@ TEST(SegmenterNet, OutputShapesAndGradients) {
   for (const auto& p : net->named_parameters()) {
     ASSERT_TRUE(p.value().grad().defined()) << p.key();
   }
+}
+
+TEST(SegmenterNet, DecoderGivesLogitsAtItsBlocksStride) {
+  NetConfig config = SmallConfig(NetKind::kSegmenter);
+  config.decoder_block = 3;  // stride 4
+  config.decoder_channels = 8;
+  SegmenterNet net(config);
+  const SegmenterOutput out = net->forward(torch::rand({2, 3, 48, 64}) * 2 - 1);
+  EXPECT_EQ(out.logits.sizes(), (std::vector<int64_t>{2, 4, 12, 16}));
+  EXPECT_EQ(out.class_logits.sizes(), (std::vector<int64_t>{2, 4}));
+  (out.logits.square().sum() + out.class_logits.sum()).backward();
+  for (const auto& p : net->named_parameters()) {
+    ASSERT_TRUE(p.value().grad().defined()) << p.key();
+  }
+  // Sizes that are not multiples of the stride: the head is upsampled to the block's grid.
+  torch::NoGradGuard no_grad;
+  EXPECT_EQ(net->forward(torch::rand({1, 3, 50, 70})).logits.sizes(),
+            (std::vector<int64_t>{1, 4, 13, 18}));
+}
+
+TEST(MobileNetV2, TappedForwardReturnsTheBlockAndTheSameOutput) {
+  BackboneOptions options;
+  options.last_block = 6;
+  options.output_stride = 8;
+  MobileNetV2 backbone(options);
+  torch::NoGradGuard no_grad;
+  const torch::Tensor x = torch::rand({1, 3, 48, 64}) * 2 - 1;
+  torch::Tensor tapped;
+  const torch::Tensor y = backbone->forward(x, 3, &tapped);
+  EXPECT_EQ(tapped.sizes(), (std::vector<int64_t>{1, BlockChannels(3), 12, 16}));
+  EXPECT_TRUE(torch::allclose(y, backbone->forward(x), 1e-5, 1e-6));
+}
+
+TEST(ApplyConv, PointwiseGemmEqualsTheConvolution) {
+  torch::manual_seed(5);
+  torch::nn::Conv2d one(torch::nn::Conv2dOptions(6, 4, 1));
+  torch::nn::Conv2d three(torch::nn::Conv2dOptions(6, 4, 3).padding(1));
+  const torch::Tensor x = torch::rand({2, 6, 5, 7});
+  for (const torch::Tensor& input : {x, x.contiguous(torch::MemoryFormat::ChannelsLast)}) {
+    EXPECT_TRUE(torch::allclose(ApplyConv(*one, input), one->forward(x), 1e-5, 1e-6));
+    EXPECT_TRUE(torch::allclose(ApplyConv(*three, input), three->forward(x), 1e-5, 1e-6));
+  }
+  // Gradients flow through the GEMM as through the convolution.
+  ApplyConv(*one, x).square().sum().backward();
+  const torch::Tensor gemm_grad = one->weight.grad().clone();
+  one->weight.mutable_grad().zero_();
+  one->forward(x).square().sum().backward();
+  EXPECT_TRUE(torch::allclose(gemm_grad, one->weight.grad(), 1e-4, 1e-5));
 }
 
 TEST(SegmenterNet, ImagesAreIndependentInABatch) {

@@ -1,6 +1,7 @@
 // TorchSegmenter::Run on a 480x360 image (CamVid's size) with 2 intra-op threads, for the default
 // NetConfig and larger inputs / deeper backbones. Weights are random (ImageNet-initialized nets
-// cost the same); 11 classes as CamVid. Args: input width, input height, last_block, stride.
+// cost the same); 11 classes as CamVid. Args: input width, input height, last_block, stride,
+// decoder block (0: none), ASPP channels (head_channels; decoder_channels is two thirds of it).
 //
 //   OMP_WAIT_POLICY=passive ./build/src/moslam/net/bench_net_segmenter
 //   MOSLAM_BENCH_THREADS=1 ./build/src/moslam/net/bench_net_segmenter
@@ -36,6 +37,9 @@ void BM_TorchSegmenterRun(benchmark::State& state) {
   config.input_height = static_cast<int>(state.range(1));
   config.backbone.last_block = static_cast<int>(state.range(2));
   config.backbone.output_stride = static_cast<int>(state.range(3));
+  config.decoder_block = static_cast<int>(state.range(4));
+  config.head_channels = static_cast<int>(state.range(5));
+  config.decoder_channels = config.head_channels * 2 / 3;
   torch::manual_seed(0);
   at::set_num_threads(Threads());
   TorchSegmenter segmenter{SegmenterNet(config)};
@@ -48,15 +52,21 @@ void BM_TorchSegmenterRun(benchmark::State& state) {
   }
   state.SetLabel(std::to_string(config.input_width) + "x" + std::to_string(config.input_height) +
                  " block " + std::to_string(config.backbone.last_block) + " os" +
-                 std::to_string(config.backbone.output_stride));
+                 std::to_string(config.backbone.output_stride) +
+                 (config.decoder_block > 0 ? " decoder " + std::to_string(config.decoder_block)
+                                           : std::string()) +
+                 " head " + std::to_string(config.head_channels));
 }
 BENCHMARK(BM_TorchSegmenterRun)
-    ->ArgNames({"w", "h", "block", "os"})
-    ->Args({320, 240, 13, 16})  // the default NetConfig
-    ->Args({480, 360, 13, 16})
-    ->Args({320, 240, 17, 16})
-    ->Args({480, 360, 17, 16})
-    ->Args({320, 240, 13, 8})
+    ->ArgNames({"w", "h", "block", "os", "dec", "head"})
+    ->Args({320, 240, 13, 16, 0, 96})  // the default NetConfig
+    ->Args({320, 240, 13, 16, 3, 96})  // with the stride-4 decoder
+    ->Args({320, 240, 13, 16, 3, 64})  // the same, narrower
+    ->Args({320, 240, 13, 16, 6, 96})  // with a stride-8 decoder
+    ->Args({480, 360, 13, 16, 0, 96})
+    ->Args({320, 240, 17, 16, 0, 96})
+    ->Args({480, 360, 17, 16, 0, 96})
+    ->Args({320, 240, 13, 8, 0, 96})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);
 

@@ -1,6 +1,7 @@
 // GenerateCues (training.h): class activation maps of the colour and grey classifiers turned into
 // seeds, refined with superpixels and fused (Sun, Tai, Gao, Liu, Yeung 2019).
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -22,6 +23,34 @@
 namespace moslam::weak {
 
 namespace fs = std::filesystem;
+
+namespace internal {
+
+torch::Tensor AugmentedProbabilities(net::SegmenterNet& net, const cv::Mat& image,
+                                     const std::vector<double>& scales, bool flip) {
+  torch::Tensor sum;
+  int views = 0;
+  for (double scale : scales) {
+    cv::Mat scaled = image;
+    if (scale != 1.0) {
+      const cv::Size size(std::max(32, static_cast<int>(std::lround(image.cols * scale))),
+                          std::max(32, static_cast<int>(std::lround(image.rows * scale))));
+      cv::resize(image, scaled, size, 0, 0, scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+    }
+    const torch::Tensor input = ToInputTensor(scaled).unsqueeze(0);
+    for (int mirrored = 0; mirrored <= (flip ? 1 : 0); ++mirrored) {
+      torch::Tensor logits = net->forward(mirrored ? input.flip({3}) : input).logits;
+      if (mirrored) logits = logits.flip({3});
+      const torch::Tensor p =
+          torch::softmax(internal::UpsampleBilinear(logits, image.rows, image.cols), 1);
+      sum = views == 0 ? p : sum + p;
+      ++views;
+    }
+  }
+  return (sum / views).squeeze(0).to(torch::kFloat32).contiguous();
+}
+
+}  // namespace internal
 
 namespace {
 
@@ -213,7 +242,9 @@ class CueWriter {
     if (!options_.segmenter_model.empty()) {
       report["self_training"] = {{"confidence", options_.confidence},
                                  {"fallback_cues", options_.fallback_cues},
-                                 {"depth_folder", options_.depth_folder}};
+                                 {"depth_folder", options_.depth_folder},
+                                 {"scales", options_.scales},
+                                 {"flip", options_.flip}};
     }
     for (size_t c = 0; c < seg_classes_.size(); ++c) {
       report["class_fraction"][seg_classes_[c]] = class_pixels_[c] / std::max(1.0, stats_.pixels);
@@ -293,6 +324,12 @@ cv::Mat DepthOf(const ImageListEntry& entry, const CueGenerationOptions& options
 
 // The second round (CueGenerationOptions::segmenter_model): cues from a trained segmenter.
 void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
+  if (options.scales.empty()) throw InputError("cues: scales must not be empty");
+  for (double scale : options.scales) {
+    if (!(scale >= 0.25 && scale <= 4.0)) {
+      throw InputError(fmt::format("cues: scales must be in [0.25, 4], got {}", scale));
+    }
+  }
   if (!options.depth_folder.empty() && !(options.depth_factor > 0.0)) {
     throw InputError(fmt::format("cues: depth_factor must be > 0 (raw units per metre), got {}",
                                  options.depth_factor));
@@ -325,12 +362,8 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
   size_t missed = 0;
   for (size_t i = 0; i < list.entries.size(); ++i) {
     const Sample sample = LoadSample(list, static_cast<int>(i), resize, rng, false);
-    const torch::Tensor logits = net->forward(ToInputTensor(sample.image).unsqueeze(0)).logits;
     const torch::Tensor probabilities =
-        torch::softmax(internal::UpsampleBilinear(logits, sample.image.rows, sample.image.cols), 1)
-            .squeeze(0)
-            .to(torch::kFloat32)
-            .contiguous();
+        internal::AugmentedProbabilities(net, sample.image, options.scales, options.flip);
     const int sizes[] = {static_cast<int>(probabilities.size(0)), sample.image.rows,
                          sample.image.cols};
     const cv::Mat planar(3, sizes, CV_32F, probabilities.data_ptr<float>());
@@ -377,6 +410,9 @@ void GenerateCues(const CueGenerationOptions& options) {
   }
   if (!options.depth_folder.empty()) {
     throw InputError("cues: --depth-folder is for self-training cues (--segmenter) only");
+  }
+  if (options.flip || options.scales != std::vector<double>{1.0}) {
+    throw InputError("cues: --scales and --flip are for self-training cues (--segmenter) only");
   }
   const ImageList list = TrainingList(options);
   const std::vector<std::string> classifier_classes =

@@ -101,6 +101,13 @@ struct CueGenerationOptions {
   // sensor data that comes with every image, not a label.
   std::string depth_folder;
   double depth_factor = 5000.0;
+  // Test-time augmentation of the segmenter's softmax (self-training only): the mean over the
+  // image resized by each of `scales` (relative to the network's input size) and, with `flip`,
+  // over their mirror images too, as WSSS methods do when they make pseudo-labels (e.g. Ahn and
+  // Kwak, CVPR 2018): a larger scale finds small objects and outlines that the stride-16 map
+  // blurs, and averaging cancels a part of the errors of any one view.
+  std::vector<double> scales = {1.0};
+  bool flip = false;
 };
 
 struct SegmenterTrainOptions {

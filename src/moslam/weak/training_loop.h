@@ -99,6 +99,12 @@ cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<f
 // N x C x height x width: the logits and CAMs of every stage go through it.
 torch::Tensor UpsampleBilinear(const torch::Tensor& maps, int64_t height, int64_t width);
 
+// The segmenter's softmax on `image` (CV_8UC3 BGR at the network's input size), C x H x W at
+// the image's size: the mean over the image resized by each of `scales` and, with `flip`, their
+// mirror images (CueGenerationOptions::scales).
+torch::Tensor AugmentedProbabilities(net::SegmenterNet& net, const cv::Mat& image,
+                                     const std::vector<double>& scales, bool flip);
+
 // Where training runs: the first CUDA device when libtorch sees one, else the CPU (logged).
 torch::Device TrainingDevice();
 

@@ -261,12 +261,69 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   fs::remove(data_ + "/depth/003.png");
   EXPECT_THAT(testing::ErrorOf([&] { GenerateCues(with_depth); }),
               ::testing::HasSubstr("depth/003.png"));
-  // Depth is for self-training cues; classifier models and a segmenter together are an error.
+  // Test-time augmentation (scales and mirror images) is recorded with the cues.
+  CueGenerationOptions augmented = second;
+  augmented.out = dir_.path() + "/cues6";
+  augmented.scales = {1.0, 1.5};
+  augmented.flip = true;
+  GenerateCues(augmented);
+  const nlohmann::json report6 = nlohmann::json::parse(std::ifstream(augmented.out + "/cues.json"));
+  EXPECT_EQ(report6["self_training"]["scales"], nlohmann::json({1.0, 1.5}));
+  EXPECT_EQ(report6["self_training"]["flip"], true);
+  EXPECT_GT(report6["class_fraction"]["square"].get<double>(), 0.0);
+  augmented.scales = {0.1};
+  EXPECT_THAT(testing::ErrorOf([&] { GenerateCues(augmented); }), ::testing::HasSubstr("scales"));
+  // Depth and augmentation are for self-training cues; classifier models and a segmenter
+  // together are an error.
+  augmented.segmenter_model.clear();
+  augmented.scales = {1.0};
+  augmented.colour_model = classifier.model;
+  EXPECT_THAT(testing::ErrorOf([&] { GenerateCues(augmented); }), ::testing::HasSubstr("--flip"));
   with_depth.segmenter_model.clear();
   with_depth.colour_model = classifier.model;
   EXPECT_THROW(GenerateCues(with_depth), InputError);
   second.colour_model = classifier.model;
   EXPECT_THROW(GenerateCues(second), InputError);
+}
+
+// Test-time augmentation of self-training cues: one view is the plain softmax, and the flipped
+// mean is mirror-symmetric (the mean over an image and its mirror gives, on the mirrored image,
+// the mirror of the same map), whatever the network.
+TEST(AugmentedProbabilities, OneViewIsTheSoftmaxAndFlipIsMirrorSymmetric) {
+  net::NetConfig config;
+  config.kind = net::NetKind::kSegmenter;
+  config.classes = {"square", "background"};
+  config.background = "background";
+  config.backbone.last_block = 6;
+  config.backbone.output_stride = 8;
+  config.head_channels = 8;
+  config.decoder_block = 3;
+  config.decoder_channels = 8;
+  config.input_width = 64;
+  config.input_height = 48;
+  torch::manual_seed(3);
+  net::SegmenterNet net(config);
+  net->eval();
+  torch::NoGradGuard no_grad;
+  cv::Mat image(48, 64, CV_8UC3);
+  cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(256));
+  const torch::Tensor one = internal::AugmentedProbabilities(net, image, {1.0}, false);
+  ASSERT_EQ(one.sizes(), (std::vector<int64_t>{2, 48, 64}));
+  const torch::Tensor softmax =
+      torch::softmax(internal::UpsampleBilinear(
+                         net->forward(ToInputTensor(image).unsqueeze(0)).logits, 48, 64),
+                     1)
+          .squeeze(0);
+  EXPECT_TRUE(torch::allclose(one, softmax, 1e-5, 1e-6));
+
+  const std::vector<double> scales = {1.0, 1.5};
+  const torch::Tensor both = internal::AugmentedProbabilities(net, image, scales, true);
+  cv::Mat mirrored;
+  cv::flip(image, mirrored, 1);
+  const torch::Tensor of_mirror = internal::AugmentedProbabilities(net, mirrored, scales, true);
+  EXPECT_TRUE(torch::allclose(of_mirror, both.flip({2}), 1e-4, 1e-5));
+  EXPECT_TRUE(torch::allclose(both.sum(0), torch::ones({48, 64}), 1e-4, 1e-5));
+  EXPECT_FALSE(torch::allclose(both, one, 1e-3, 1e-3));  // the other views do count
 }
 
 // A classifier trained at stride 8 (finer activation maps) starts a stride-16 segmenter: the
