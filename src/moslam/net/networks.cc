@@ -238,8 +238,8 @@ SegmenterOutput SegmenterNetImpl::forward(torch::Tensor x) {
                                      : backbone_->forward(x);
   std::vector<torch::Tensor> branches;
   branches.reserve(aspp_->size() + 1);
-  // The 1x1 convs go through ApplyConv (a GEMM; libtorch's own 1x1 conv is 3x slower on one
-  // thread). Module layout as before, so older model files load unchanged.
+  // The 1x1 convs go through ApplyConv (a GEMM instead of libtorch's single-threaded im2col
+  // path); the module layout is unchanged, so older model files load as they were.
   for (const auto& branch : *aspp_) {
     branches.push_back(
         torch::relu(ApplyConv(ConvAt(*branch->as<torch::nn::Sequential>(), 0), features)));
