@@ -215,18 +215,17 @@ MobileNetV2Impl::MobileNetV2Impl(const BackboneOptions& options) : options_(opti
   ApplyFreezing();
 }
 
-torch::Tensor MobileNetV2Impl::forward(torch::Tensor x) {
-  if (x.dim() != 4 || x.size(1) != 3) {
-    ThrowInput("MobileNetV2 wants N x 3 x H x W input (got {} dimensions)", x.dim());
-  }
-  return blocks_->forward(x.contiguous(torch::MemoryFormat::ChannelsLast));
-}
+torch::Tensor MobileNetV2Impl::forward(torch::Tensor x) { return Run(x, -1, nullptr); }
 
 torch::Tensor MobileNetV2Impl::forward(torch::Tensor x, int tap, torch::Tensor* tapped) {
+  MOSLAM_CHECK(tap >= 0 && tap <= options_.last_block && tapped != nullptr);
+  return Run(x, tap, tapped);
+}
+
+torch::Tensor MobileNetV2Impl::Run(const torch::Tensor& x, int tap, torch::Tensor* tapped) {
   if (x.dim() != 4 || x.size(1) != 3) {
     ThrowInput("MobileNetV2 wants N x 3 x H x W input (got {} dimensions)", x.dim());
   }
-  MOSLAM_CHECK(tap >= 0 && tap <= options_.last_block && tapped != nullptr);
   torch::Tensor y = x.contiguous(torch::MemoryFormat::ChannelsLast);
   for (size_t i = 0; i < blocks_->size(); ++i) {
     y = blocks_->ptr(i)->as<BlockImpl>()->forward(y);

@@ -58,6 +58,8 @@ class MobileNetV2Impl : public torch::nn::Module {
   void ApplyFreezing();
 
  private:
+  torch::Tensor Run(const torch::Tensor& x, int tap, torch::Tensor* tapped);  // tap -1: none
+
   BackboneOptions options_;
   torch::nn::Sequential blocks_{nullptr};  // one entry per torchvision block 0..last_block
 };

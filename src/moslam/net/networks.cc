@@ -71,9 +71,6 @@ void InitClassConv(torch::nn::Conv2d& conv) {
 torch::nn::Conv2dImpl& ConvAt(torch::nn::SequentialImpl& sequential, size_t i) {
   return *sequential.ptr(i)->as<torch::nn::Conv2dImpl>();
 }
-torch::nn::Conv2dImpl& ConvAt(torch::nn::Sequential& sequential, size_t i) {
-  return ConvAt(*sequential, i);
-}
 
 }  // namespace
 
@@ -248,23 +245,26 @@ SegmenterOutput SegmenterNetImpl::forward(torch::Tensor x) {
   branches.push_back(image_pool_->forward(features).expand(
       {features.size(0), config_.head_channels, features.size(2), features.size(3)}));
   SegmenterOutput out;
-  torch::Tensor head = torch::relu(ApplyConv(ConvAt(project_, 0), torch::cat(branches, 1)));
+  torch::Tensor head = torch::relu(ApplyConv(ConvAt(*project_, 0), torch::cat(branches, 1)));
   if (config_.decoder_block > 0) {
-    head = torch::nn::functional::interpolate(
-        head, torch::nn::functional::InterpolateFuncOptions()
-                  .size(std::vector<int64_t>{low_level.size(2), low_level.size(3)})
-                  .mode(torch::kBilinear)
-                  .align_corners(false));
-    const torch::Tensor low = torch::relu(ApplyConv(ConvAt(low_level_, 0), low_level));
+    head = UpsampleBilinear(head, low_level.size(2), low_level.size(3));
+    const torch::Tensor low = torch::relu(ApplyConv(ConvAt(*low_level_, 0), low_level));
     // Depthwise convs are ~20x faster on the channels-last layout; cat may not keep it.
     const torch::Tensor both =
         torch::cat({head, low}, 1).contiguous(torch::MemoryFormat::ChannelsLast);
-    head = torch::relu(ConvAt(decoder_, 0).forward(both));
-    head = torch::relu(ApplyConv(ConvAt(decoder_, 2), head));
+    head = torch::relu(ConvAt(*decoder_, 0).forward(both));
+    head = torch::relu(ApplyConv(ConvAt(*decoder_, 2), head));
   }
   out.logits = ApplyConv(*classify_, head);
   out.class_logits = ApplyConv(*aux_class_map_, features).mean({2, 3});
   return out;
+}
+
+torch::Tensor UpsampleBilinear(const torch::Tensor& maps, int64_t height, int64_t width) {
+  return torch::nn::functional::interpolate(maps, torch::nn::functional::InterpolateFuncOptions()
+                                                      .size(std::vector<int64_t>{height, width})
+                                                      .mode(torch::kBilinear)
+                                                      .align_corners(false));
 }
 
 torch::Tensor ImageToTensor(const cv::Mat& image, const NetConfig& config) {

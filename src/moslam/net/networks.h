@@ -110,6 +110,10 @@ class SegmenterNetImpl : public torch::nn::Module {
 };
 TORCH_MODULE(SegmenterNet);
 
+// Bilinear upsampling (align_corners false, as inference does) of N x C x h x w maps to
+// N x C x height x width: the decoder's head, and the logits and CAMs of every training stage.
+torch::Tensor UpsampleBilinear(const torch::Tensor& maps, int64_t height, int64_t width);
+
 // Image (CV_8UC3 BGR or CV_8UC1 grey, any size) -> 1 x 3 x input_height x input_width float
 // tensor as the config wants it (resized with INTER_AREA when shrinking, grey replicated or colour
 // converted to grey when config.grey).

@@ -30,6 +30,13 @@ NetConfig SmallConfig(NetKind kind) {
   return config;
 }
 
+// Every parameter is reached by the loss (nothing registered but unused).
+void ExpectEveryParameterHasAGradient(const torch::nn::Module& net) {
+  for (const auto& p : net.named_parameters()) {
+    EXPECT_TRUE(p.value().grad().defined()) << p.key();
+  }
+}
+
 TEST(NetConfig, JsonRoundTrip) {
   NetConfig config = SmallConfig(NetKind::kSegmenter);
   config.grey = true;
@@ -119,11 +126,8 @@ TEST(ClassifierNet, LogitsAreTheSpatialMeanOfTheCams) {
   EXPECT_EQ(out.cams.sizes(), (std::vector<int64_t>{2, 4, 6, 8}));
   EXPECT_EQ(out.logits.sizes(), (std::vector<int64_t>{2, 4}));
   EXPECT_TRUE(torch::allclose(out.logits, out.cams.mean({2, 3}), 1e-5, 1e-7));
-  // Every parameter is reached by the loss (nothing registered but unused).
   out.logits.sum().backward();
-  for (const auto& p : net->named_parameters()) {
-    EXPECT_TRUE(p.value().grad().defined()) << p.key();
-  }
+  ExpectEveryParameterHasAGradient(*net);
 }
 
 TEST(SegmenterNet, OutputShapesAndGradients) {
@@ -132,9 +136,7 @@ TEST(SegmenterNet, OutputShapesAndGradients) {
   EXPECT_EQ(out.logits.sizes(), (std::vector<int64_t>{2, 4, 6, 8}));
   EXPECT_EQ(out.class_logits.sizes(), (std::vector<int64_t>{2, 4}));
   (out.logits.square().sum() + out.class_logits.sum()).backward();
-  for (const auto& p : net->named_parameters()) {
-    ASSERT_TRUE(p.value().grad().defined()) << p.key();
-  }
+  ExpectEveryParameterHasAGradient(*net);
 }
 
 TEST(SegmenterNet, DecoderGivesLogitsAtItsBlocksStride) {
@@ -146,9 +148,7 @@ TEST(SegmenterNet, DecoderGivesLogitsAtItsBlocksStride) {
   EXPECT_EQ(out.logits.sizes(), (std::vector<int64_t>{2, 4, 12, 16}));
   EXPECT_EQ(out.class_logits.sizes(), (std::vector<int64_t>{2, 4}));
   (out.logits.square().sum() + out.class_logits.sum()).backward();
-  for (const auto& p : net->named_parameters()) {
-    ASSERT_TRUE(p.value().grad().defined()) << p.key();
-  }
+  ExpectEveryParameterHasAGradient(*net);
   // Sizes that are not multiples of the stride: the head is upsampled to the block's grid.
   torch::NoGradGuard no_grad;
   EXPECT_EQ(net->forward(torch::rand({1, 3, 50, 70})).logits.sizes(),

@@ -25,8 +25,10 @@ cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<f
   const torch::Device device = net->parameters().front().device();
   const torch::Tensor input = ToInputTensor(image).unsqueeze(0).to(device);
   const net::ClassifierOutput out = net->forward(input);
-  const torch::Tensor cams =
-      UpsampleBilinear(out.cams, image.rows, image.cols).squeeze(0).to(torch::kCPU).contiguous();
+  const torch::Tensor cams = net::UpsampleBilinear(out.cams, image.rows, image.cols)
+                                 .squeeze(0)
+                                 .to(torch::kCPU)
+                                 .contiguous();
   const int sizes[] = {static_cast<int>(cams.size(0)), image.rows, image.cols};
   cv::Mat result(3, sizes, CV_32F);
   std::memcpy(result.data, cams.data_ptr<float>(), cams.numel() * sizeof(float));

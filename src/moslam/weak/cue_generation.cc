@@ -42,7 +42,7 @@ torch::Tensor AugmentedProbabilities(net::SegmenterNet& net, const cv::Mat& imag
       torch::Tensor logits = net->forward(mirrored ? input.flip({3}) : input).logits;
       if (mirrored) logits = logits.flip({3});
       const torch::Tensor p =
-          torch::softmax(internal::UpsampleBilinear(logits, image.rows, image.cols), 1);
+          torch::softmax(net::UpsampleBilinear(logits, image.rows, image.cols), 1);
       sum = views == 0 ? p : sum + p;
       ++views;
     }

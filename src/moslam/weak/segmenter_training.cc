@@ -113,7 +113,7 @@ torch::Tensor LossLogits(const torch::Tensor& logits, const torch::Tensor& image
   const int64_t h = std::max<int64_t>(1, images.size(2) / loss_stride);
   const int64_t w = std::max<int64_t>(1, images.size(3) / loss_stride);
   if (h <= logits.size(2) && w <= logits.size(3)) return logits;
-  return internal::UpsampleBilinear(logits, h, w);
+  return net::UpsampleBilinear(logits, h, w);
 }
 
 cv::Mat LabelsToMat(const torch::Tensor& labels) {
@@ -136,7 +136,7 @@ void WritePreviews(net::SegmenterNet& net, const ImageList& list,
     const torch::Device device = net->parameters().front().device();
     const torch::Tensor logits =
         net->forward(ToInputTensor(s.image).unsqueeze(0).to(device)).logits.to(torch::kCPU);
-    const torch::Tensor up = internal::UpsampleBilinear(logits, s.image.rows, s.image.cols);
+    const torch::Tensor up = net::UpsampleBilinear(logits, s.image.rows, s.image.cols);
     const cv::Mat prediction = LabelsToMat(up.squeeze(0).argmax(0));
     cv::imwrite(
         fmt::format("{}/seg_{:04d}.png", folder, i),

@@ -26,13 +26,6 @@ namespace moslam::weak::internal {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-torch::Tensor UpsampleBilinear(const torch::Tensor& maps, int64_t height, int64_t width) {
-  return torch::nn::functional::interpolate(maps, torch::nn::functional::InterpolateFuncOptions()
-                                                      .size(std::vector<int64_t>{height, width})
-                                                      .mode(torch::kBilinear)
-                                                      .align_corners(false));
-}
-
 torch::Device TrainingDevice() {
   if (torch::cuda::is_available()) {
     spdlog::info("training on CUDA device 0 ({} visible)", torch::cuda::device_count());

@@ -95,10 +95,6 @@ namespace moslam::weak::internal {
 // receives the sigmoid class scores when not null.
 cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<float>* scores);
 
-// Bilinear upsampling (align_corners false, as inference does) of N x C x h x w maps to
-// N x C x height x width: the logits and CAMs of every stage go through it.
-torch::Tensor UpsampleBilinear(const torch::Tensor& maps, int64_t height, int64_t width);
-
 // The segmenter's softmax on `image` (CV_8UC3 BGR at the network's input size), C x H x W at
 // the image's size: the mean over the image resized by each of `scales` and, with `flip`, their
 // mirror images (CueGenerationOptions::scales).

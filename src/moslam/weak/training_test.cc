@@ -310,9 +310,8 @@ TEST(AugmentedProbabilities, OneViewIsTheSoftmaxAndFlipIsMirrorSymmetric) {
   const torch::Tensor one = internal::AugmentedProbabilities(net, image, {1.0}, false);
   ASSERT_EQ(one.sizes(), (std::vector<int64_t>{2, 48, 64}));
   const torch::Tensor softmax =
-      torch::softmax(internal::UpsampleBilinear(
-                         net->forward(ToInputTensor(image).unsqueeze(0)).logits, 48, 64),
-                     1)
+      torch::softmax(
+          net::UpsampleBilinear(net->forward(ToInputTensor(image).unsqueeze(0)).logits, 48, 64), 1)
           .squeeze(0);
   EXPECT_TRUE(torch::allclose(one, softmax, 1e-5, 1e-6));
 
