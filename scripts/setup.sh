@@ -10,6 +10,8 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
   libceres-dev
   libopencv-contrib-dev libtorch-dev
+  # the BLAS libtorch and CHOLMOD get through Debian's alternatives (ATLAS otherwise; README)
+  libopenblas0-openmp
   libosmesa6-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -49,6 +49,9 @@ struct SegEvalArgs {
   std::vector<std::string> label_names;
   int threads = 2;
   int limit = 0;
+  // Run a torch network at this input size instead of its model's (0: the model's).
+  int input_width = 0;
+  int input_height = 0;
 };
 
 // Ground-truth id -> model class: by CamVid class name when the model names CamVid classes (ids
@@ -157,7 +160,19 @@ void PrintScores(const weak::SegEvaluator& eval, const std::string& describe, do
 }
 
 void Run(const SegEvalArgs& args) {
-  const semantic::ModelCard card = LoadCard(args.model);
+  semantic::ModelCard card = LoadCard(args.model);
+  if (args.input_width > 0 || args.input_height > 0) {
+    if (card.kind != semantic::ModelKind::kTorch) {
+      ThrowInput("--input-width/--input-height: only a torch network runs at another size ({})",
+                 args.model);
+    }
+    if (args.input_width < 32 || args.input_height < 32) {
+      ThrowInput("--input-width/--input-height: give both, each at least 32 (are {} and {})",
+                 args.input_width, args.input_height);
+    }
+    card.input_width = args.input_width;
+    card.input_height = args.input_height;
+  }
   const std::unique_ptr<semantic::MaskProvider> provider = MakeProvider(card, args);
   const std::vector<std::string> paths = ImagePaths(args);
   spdlog::info("{} images{}, {}", paths.size(), args.grey ? " (grey)" : "", provider->Describe());
@@ -305,6 +320,10 @@ void AddSegEvalCommand(CLI::App& app) {
                   "libtorch intra-op threads (on a busy machine use 1, or set "
                   "OMP_WAIT_POLICY=passive: OpenMP threads spin while waiting)")
       ->capture_default_str();
+  cmd->add_option("--input-width", args->input_width,
+                  "Run a torch network at this input width (pixels) instead of its model's; with "
+                  "--input-height (the network is fully convolutional)");
+  cmd->add_option("--input-height", args->input_height, "Input height for --input-width (pixels)");
   cmd->add_option("--limit", args->limit, "Evaluate only the first N images (0: all)")
       ->capture_default_str();
   cmd->callback([args] { Run(*args); });

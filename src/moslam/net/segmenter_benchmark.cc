@@ -63,7 +63,9 @@ BENCHMARK(BM_TorchSegmenterRun)
     ->Args({320, 240, 13, 16, 3, 96})  // with the stride-4 decoder
     ->Args({320, 240, 13, 16, 3, 64})  // the same, narrower
     ->Args({320, 240, 13, 16, 6, 96})  // with a stride-8 decoder
-    ->Args({480, 360, 13, 16, 0, 96})
+    ->Args({480, 360, 13, 16, 0, 96})  // the default net run at 480x360 (a card's input size)
+    ->Args({480, 360, 13, 16, 3, 96})
+    ->Args({480, 360, 13, 16, 6, 96})
     ->Args({320, 240, 17, 16, 0, 96})
     ->Args({480, 360, 17, 16, 0, 96})
     ->Args({320, 240, 13, 8, 0, 96})

@@ -63,9 +63,11 @@ void CompleteTorchCard(const NetConfig& config, semantic::ModelCard* card) {
   if (card->input_width == 0 && card->input_height == 0) {
     card->input_width = config.input_width;
     card->input_height = config.input_height;
-  } else if (card->input_width != config.input_width || card->input_height != config.input_height) {
-    ThrowInFile(card->path, fmt::format("input_width, input_height: {}x{}, but the model takes "
-                                        "{}x{} (omit them to take the model's)",
+  } else if (card->input_width < 32 || card->input_height < 32) {
+    // The network is fully convolutional: a card may run it at another size than it was trained
+    // at (TorchSegmenter::set_input_size), but not below its smallest useful input.
+    ThrowInFile(card->path, fmt::format("input_width, input_height: {}x{}, a torch model needs at "
+                                        "least 32x32 (omit them to take the model's {}x{})",
                                         card->input_width, card->input_height, config.input_width,
                                         config.input_height));
   }
@@ -109,6 +111,7 @@ TorchMaskProvider::TorchMaskProvider(const semantic::ModelCard& card,
       card_(Completed(card, segmenter_->config())),
       movable_(card_.MovableFlags()),
       refiner_(refine, movable_, card_.BackgroundIndex()) {
+  segmenter_->set_input_size({card_.input_width, card_.input_height});
   if (card_.movable.empty()) {
     spdlog::warn("{}: no class is movable; every mask is empty", card_.path);
   }
@@ -148,10 +151,10 @@ semantic::MaskResult TorchMaskProvider::Refine(semantic::Prediction prediction,
 
 std::string TorchMaskProvider::Describe() const {
   const semantic::RefineOptions& refine = refiner_.options();
-  std::string text =
-      fmt::format("torch {} {}x{} (movable: {}), crf {}, working side {} px", card_.name,
-                  card_.input_width, card_.input_height, fmt::join(card_.movable, ", "),
-                  semantic::ToString(refine.crf), refine.working_side);
+  std::string text = fmt::format("torch {} {}x{} (movable: {}), crf {}, working side {} px",
+                                 card_.name, segmenter_->input_size().width,
+                                 segmenter_->input_size().height, fmt::join(card_.movable, ", "),
+                                 semantic::ToString(refine.crf), refine.working_side);
   if (refine.suppress_below > 0.0f) text += fmt::format(", suppress < {}", refine.suppress_below);
   if (refine.dilate_px > 0) text += fmt::format(", dilated {} px", refine.dilate_px);
   return text;

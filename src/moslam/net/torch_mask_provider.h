@@ -24,9 +24,11 @@ class TorchSegmenter;
 
 // Completes a torch card from its model's NetConfig: absent classes, movable, background and input
 // size are taken from the model; given ones must agree (classes in the same order, the same
-// background and input size; mean/scale/rgb those of ImageToTensor: [127.5]*3, 1/127.5, rgb),
-// except `movable`, which replaces the model's movable classes (each must be a class). InputError
-// naming the card and key otherwise, or when the model is not a segmenter.
+// background; mean/scale/rgb those of ImageToTensor: [127.5]*3, 1/127.5, rgb), except `movable`,
+// which replaces the model's movable classes (each must be a class), and the input size, at which
+// the provider runs the (fully convolutional) network instead of the size it was trained at
+// (at least 32x32). InputError naming the card and key otherwise, or when the model is not a
+// segmenter.
 void CompleteTorchCard(const NetConfig& config, semantic::ModelCard* card);
 // The same with the config read from card->model (InputError when it is not a model file).
 void CompleteTorchCard(semantic::ModelCard* card);

@@ -128,6 +128,18 @@ TEST(TorchMaskProvider, CardMovableClassesReplaceTheModels) {
   EXPECT_EQ(cv::countNonZero(tree.Segment({RandomImage(24, 32, CV_8UC3), {}}).mask), 0);
 }
 
+TEST(TorchMaskProvider, CardInputSizeIsWhatTheNetworkRunsAt) {
+  testing::TempDir dir;
+  SaveForcedSegmenter(dir, 1);  // car, a 64x48 model
+  const semantic::ModelCard card = LoadAnyModelCard(dir.Write(
+      "big.yaml", "%YAML:1.0\ntype: torch\nmodel: tiny.mnet\ninput_width: 96\ninput_height: 72\n"));
+  EXPECT_EQ(card.input_width, 96);
+  EXPECT_EQ(card.input_height, 72);
+  TorchMaskProvider provider(card, Refine(32));
+  EXPECT_THAT(provider.Describe(), HasSubstr("96x72"));
+  EXPECT_EQ(cv::countNonZero(provider.Segment({RandomImage(24, 32, CV_8UC3), {}}).mask), 24 * 32);
+}
+
 TEST(TorchMaskProvider, SuppressionReadsTheNetworksClassScores) {
   testing::TempDir dir;
   const std::string model = SaveForcedSegmenter(dir, 1);
@@ -156,7 +168,7 @@ TEST(TorchMaskProvider, CardsThatDisagreeWithTheModelAreInputErrors) {
                 .classes.size(),
             3u);
   EXPECT_THAT(load("classes: [car, road, tree]"), AllOf(HasSubstr("classes"), HasSubstr("bad")));
-  EXPECT_THAT(load("input_width: 32\ninput_height: 48"), HasSubstr("input_width"));
+  EXPECT_THAT(load("input_width: 16\ninput_height: 48"), HasSubstr("input_width"));
   EXPECT_THAT(load("movable: [bus]"), HasSubstr("'bus'"));
   EXPECT_THAT(load("background: road"), HasSubstr("background"));
   EXPECT_THAT(load("scale: 0.5"), HasSubstr("scale"));

@@ -28,8 +28,15 @@ class TorchSegmenter {
   TorchSegmentation Run(const cv::Mat& image);
   const NetConfig& config() const;
 
+  // The size images are resized to before the network (pixels; the model's input_width x
+  // input_height unless set). The network is fully convolutional, so it runs at any size of at
+  // least 32 x 32; a larger input resolves smaller objects at a cost that grows with the area.
+  cv::Size input_size() const;
+  void set_input_size(cv::Size size);  // InputError below 32 x 32
+
  private:
   SegmenterNet net_;
+  NetConfig input_config_;  // net_'s config with the input size Run uses
 };
 
 }  // namespace moslam::net

@@ -81,6 +81,16 @@ TEST(TorchSegmenter, FromAModelFileGivesTheNetworksOutput) {
   EXPECT_EQ(a.class_scores, b.class_scores);
 }
 
+TEST(TorchSegmenter, RunsAtAnotherInputSize) {
+  TorchSegmenter segmenter{SegmenterNet(SmallConfig())};
+  EXPECT_EQ(segmenter.input_size(), cv::Size(64, 48));
+  segmenter.set_input_size({96, 72});  // stride 8: 12 x 9 cells instead of 8 x 6
+  EXPECT_EQ(segmenter.input_size(), cv::Size(96, 72));
+  ExpectProbabilities(segmenter.Run(RandomImage(CV_8UC3)), 3, 9, 12);
+  EXPECT_EQ(segmenter.config().input_width, 64);  // the model's own config is unchanged
+  EXPECT_THAT(ErrorOf([&] { segmenter.set_input_size({31, 72}); }), HasSubstr("32x32"));
+}
+
 TEST(TorchSegmenter, AClassifierFileIsRejected) {
   testing::TempDir dir;
   NetConfig config = SmallConfig();
