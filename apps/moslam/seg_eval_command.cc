@@ -166,9 +166,9 @@ void Run(const SegEvalArgs& args) {
       ThrowInput("--input-width/--input-height: only a torch network runs at another size ({})",
                  args.model);
     }
-    if (args.input_width < 32 || args.input_height < 32) {
-      ThrowInput("--input-width/--input-height: give both, each at least 32 (are {} and {})",
-                 args.input_width, args.input_height);
+    if (args.input_width <= 0 || args.input_height <= 0) {
+      ThrowInput("--input-width/--input-height: give both (are {} and {})", args.input_width,
+                 args.input_height);
     }
     card.input_width = args.input_width;
     card.input_height = args.input_height;

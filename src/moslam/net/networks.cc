@@ -102,7 +102,7 @@ void NetConfig::Check() const {
     if (decoder_channels < 1)
       ThrowInput("net config: decoder_channels must be >= 1 (is {})", decoder_channels);
   }
-  if (input_width < 32 || input_height < 32) {
+  if (input_width < kMinInputSide || input_height < kMinInputSide) {
     ThrowInput("net config: input_width and input_height must be >= 32 pixels (are {} x {})",
                input_width, input_height);
   }
@@ -267,7 +267,7 @@ torch::Tensor UpsampleBilinear(const torch::Tensor& maps, int64_t height, int64_
                                                       .align_corners(false));
 }
 
-torch::Tensor ImageToTensor(const cv::Mat& image, const NetConfig& config) {
+torch::Tensor ImageToTensor(const cv::Mat& image, cv::Size size, bool grey) {
   if (image.empty() || image.depth() != CV_8U || (image.channels() != 3 && image.channels() != 1)) {
     ThrowInput("ImageToTensor: want a CV_8UC3 or CV_8UC1 image (got type {}, {} x {})",
                image.type(), image.cols, image.rows);
@@ -275,12 +275,11 @@ torch::Tensor ImageToTensor(const cv::Mat& image, const NetConfig& config) {
   cv::Mat grey_or_rgb;
   if (image.channels() == 1) {
     grey_or_rgb = image;
-  } else if (config.grey) {
+  } else if (grey) {
     cv::cvtColor(image, grey_or_rgb, cv::COLOR_BGR2GRAY);
   } else {
     cv::cvtColor(image, grey_or_rgb, cv::COLOR_BGR2RGB);
   }
-  const cv::Size size(config.input_width, config.input_height);
   cv::Mat resized;
   if (grey_or_rgb.size() == size) {
     resized = grey_or_rgb;
@@ -302,6 +301,10 @@ torch::Tensor ImageToTensor(const cv::Mat& image, const NetConfig& config) {
       .sub_(1.0)
       .unsqueeze(0)
       .contiguous();
+}
+
+torch::Tensor ImageToTensor(const cv::Mat& image, const NetConfig& config) {
+  return ImageToTensor(image, {config.input_width, config.input_height}, config.grey);
 }
 
 }  // namespace moslam::net

@@ -24,6 +24,9 @@ namespace moslam::net {
 
 enum class NetKind { kClassifier, kSegmenter };
 
+// Smallest input side a network takes (pixels): below it the stride-16 features are a cell or two.
+constexpr int kMinInputSide = 32;
+
 // Everything needed to rebuild a network and feed it: saved inside every model file.
 struct NetConfig {
   NetKind kind = NetKind::kClassifier;
@@ -114,9 +117,10 @@ TORCH_MODULE(SegmenterNet);
 // N x C x height x width: the decoder's head, and the logits and CAMs of every training stage.
 torch::Tensor UpsampleBilinear(const torch::Tensor& maps, int64_t height, int64_t width);
 
-// Image (CV_8UC3 BGR or CV_8UC1 grey, any size) -> 1 x 3 x input_height x input_width float
-// tensor as the config wants it (resized with INTER_AREA when shrinking, grey replicated or colour
-// converted to grey when config.grey).
+// Image (CV_8UC3 BGR or CV_8UC1 grey, any size) -> 1 x 3 x size.height x size.width float tensor
+// (resized with INTER_AREA when shrinking, grey replicated, or colour converted to grey when
+// `grey`); the second form at the config's input size and grey flag.
+torch::Tensor ImageToTensor(const cv::Mat& image, cv::Size size, bool grey);
 torch::Tensor ImageToTensor(const cv::Mat& image, const NetConfig& config);
 
 }  // namespace moslam::net

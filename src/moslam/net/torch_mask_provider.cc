@@ -63,7 +63,7 @@ void CompleteTorchCard(const NetConfig& config, semantic::ModelCard* card) {
   if (card->input_width == 0 && card->input_height == 0) {
     card->input_width = config.input_width;
     card->input_height = config.input_height;
-  } else if (card->input_width < 32 || card->input_height < 32) {
+  } else if (card->input_width < kMinInputSide || card->input_height < kMinInputSide) {
     // The network is fully convolutional: a card may run it at another size than it was trained
     // at (TorchSegmenter::set_input_size), but not below its smallest useful input.
     ThrowInFile(card->path, fmt::format("input_width, input_height: {}x{}, a torch model needs at "

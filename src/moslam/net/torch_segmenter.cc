@@ -17,29 +17,24 @@ TorchSegmenter::TorchSegmenter(const std::string& model_path, int num_threads)
 }
 
 TorchSegmenter::TorchSegmenter(SegmenterNet net)
-    : net_(std::move(net)), input_config_(net_->config()) {
+    : net_(std::move(net)), input_size_(net_->config().input_width, net_->config().input_height) {
   net_->eval();
 }
 
 const NetConfig& TorchSegmenter::config() const { return net_->config(); }
 
-cv::Size TorchSegmenter::input_size() const {
-  return {input_config_.input_width, input_config_.input_height};
-}
-
 void TorchSegmenter::set_input_size(cv::Size size) {
-  if (size.width < 32 || size.height < 32) {
+  if (size.width < kMinInputSide || size.height < kMinInputSide) {
     ThrowInput("TorchSegmenter: input size must be at least 32x32 pixels (is {}x{})", size.width,
                size.height);
   }
-  input_config_.input_width = size.width;
-  input_config_.input_height = size.height;
+  input_size_ = size;
 }
 
 TorchSegmentation TorchSegmenter::Run(const cv::Mat& image) {
   // Inference mode skips autograd bookkeeping entirely (cheaper than NoGradGuard).
   c10::InferenceMode inference;
-  const torch::Tensor input = ImageToTensor(image, input_config_);
+  const torch::Tensor input = ImageToTensor(image, input_size_, net_->config().grey);
   const SegmenterOutput out = net_->forward(input);
   const torch::Tensor probabilities = torch::softmax(out.logits[0], 0).contiguous();
   const torch::Tensor scores = torch::sigmoid(out.class_logits[0]).contiguous();

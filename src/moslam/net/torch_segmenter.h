@@ -30,13 +30,14 @@ class TorchSegmenter {
 
   // The size images are resized to before the network (pixels; the model's input_width x
   // input_height unless set). The network is fully convolutional, so it runs at any size of at
-  // least 32 x 32; a larger input resolves smaller objects at a cost that grows with the area.
-  cv::Size input_size() const;
+  // least kMinInputSide (32) a side; a larger input resolves smaller objects at a cost that grows
+  // with the area.
+  cv::Size input_size() const { return input_size_; }
   void set_input_size(cv::Size size);  // InputError below 32 x 32
 
  private:
   SegmenterNet net_;
-  NetConfig input_config_;  // net_'s config with the input size Run uses
+  cv::Size input_size_;
 };
 
 }  // namespace moslam::net
