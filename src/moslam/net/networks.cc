@@ -103,8 +103,8 @@ void NetConfig::Check() const {
       ThrowInput("net config: decoder_channels must be >= 1 (is {})", decoder_channels);
   }
   if (input_width < kMinInputSide || input_height < kMinInputSide) {
-    ThrowInput("net config: input_width and input_height must be >= 32 pixels (are {} x {})",
-               input_width, input_height);
+    ThrowInput("net config: input_width and input_height must be >= {} pixels (are {} x {})",
+               kMinInputSide, input_width, input_height);
   }
 }
 

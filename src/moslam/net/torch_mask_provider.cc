@@ -67,9 +67,9 @@ void CompleteTorchCard(const NetConfig& config, semantic::ModelCard* card) {
     // The network is fully convolutional: a card may run it at another size than it was trained
     // at (TorchSegmenter::set_input_size), but not below its smallest useful input.
     ThrowInFile(card->path, fmt::format("input_width, input_height: {}x{}, a torch model needs at "
-                                        "least 32x32 (omit them to take the model's {}x{})",
-                                        card->input_width, card->input_height, config.input_width,
-                                        config.input_height));
+                                        "least {}x{} (omit them to take the model's {}x{})",
+                                        card->input_width, card->input_height, kMinInputSide,
+                                        kMinInputSide, config.input_width, config.input_height));
   }
   // ImageToTensor (networks.h) feeds RGB scaled to [-1, 1]; a card cannot change that.
   if (card->mean.size() != 3 || !Near(card->mean[0], 127.5) || !Near(card->mean[1], 127.5) ||

@@ -25,8 +25,8 @@ const NetConfig& TorchSegmenter::config() const { return net_->config(); }
 
 void TorchSegmenter::set_input_size(cv::Size size) {
   if (size.width < kMinInputSide || size.height < kMinInputSide) {
-    ThrowInput("TorchSegmenter: input size must be at least 32x32 pixels (is {}x{})", size.width,
-               size.height);
+    ThrowInput("TorchSegmenter: input size must be at least {0}x{0} pixels (is {1}x{2})",
+               kMinInputSide, size.width, size.height);
   }
   input_size_ = size;
 }

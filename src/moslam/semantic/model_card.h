@@ -28,8 +28,9 @@
 // normalization and classes (net/networks.h NetConfig). The keys input_width, input_height, mean,
 // scale, rgb, classes, movable and background are then optional: absent ones are taken from the
 // model file, given ones must agree with it (classes in the same order), except `movable`, which
-// may choose other movable classes among the model's. Such a card is completed when the provider
-// loads the model (net::CompleteTorchCard); until then `classes` may be empty.
+// may choose other movable classes among the model's, and the input size, at which the provider
+// runs the fully convolutional network instead of its training size. Such a card is completed when
+// the provider loads the model (net::CompleteTorchCard); until then `classes` may be empty.
 #pragma once
 
 #include <string>
