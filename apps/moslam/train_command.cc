@@ -78,6 +78,12 @@ void AddTrainCommand(CLI::App& app) {
   AddCommonOptions(c, &classifier.common);
   AddBackboneOptions(c, &classifier.net);
   c->add_flag("--grey", classifier.net.grey, "train on grey images");
+  c->add_option("--label-grid-cols", classifier.common.augment.label_grid_cols,
+                "crop labels of a grid of cells, columns (0: none; data with label images)")
+      ->capture_default_str();
+  c->add_option("--label-grid-rows", classifier.common.augment.label_grid_rows,
+                "crop labels of a grid of cells, rows")
+      ->capture_default_str();
   c->add_option("--imagenet", classifier.imagenet_weights,
                 "ImageNet MobileNetV2 TorchScript file ('none': random init; default: shared)");
   c->callback([] { weak::TrainClassifier(classifier); });
@@ -109,6 +115,16 @@ void AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   q->add_option("--eval-labels", cues.eval_labels,
                 "pixel-label folder, read only to report the cues' precision");
+  q->add_option(
+       "--label-grid-cols", cues.label_grid_cols,
+       "crop labels of a grid of cells suppress absent classes per cell, columns (0: none)")
+      ->capture_default_str();
+  q->add_option("--label-grid-rows", cues.label_grid_rows, "crop-label grid rows")
+      ->capture_default_str();
+  q->add_flag("--cell-max", cues.cell_max,
+              "with a label grid: normalize CAMs by their maximum in each cell, not the image");
+  q->add_flag("--no-background-in-movable-cells", cues.no_background_in_movable_cells,
+              "with a label grid: no background seeds in cells that hold a movable class");
   q->add_option("--segmenter", cues.segmenter_model,
                 "self-training: cues from this segmenter + CRF instead of classifiers");
   q->add_option("--confidence", cues.confidence,
@@ -166,8 +182,14 @@ void AddTrainCommand(CLI::App& app) {
   s->add_option("--loss-stride", segmenter.loss_stride,
                 "losses on logits upsampled to input/N (0: the network's output stride)")
       ->capture_default_str();
-  s->add_flag("!--unbalanced-seeds", segmenter.class_balanced_seeds,
-              "seeding loss as the plain mean over seeds (default: class-balanced, as SEC)");
+  s->add_option("--seed-balance", segmenter.seed_balance,
+                "seeding loss class balance: 1 per class as SEC, 0 the plain mean over seeds, "
+                "between: a class's seeds weigh count^-B")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  s->add_flag_callback(
+      "--unbalanced-seeds", [] { segmenter.seed_balance = 0.0; },
+      "seeding loss as the plain mean over seeds (--seed-balance 0)");
   s->callback([] { weak::TrainSegmenter(segmenter); });
 }
 

@@ -96,15 +96,8 @@ cv::Mat ReadSingleChannel(const std::string& path, const cv::Size& size, const c
   return m;
 }
 
-// Labels of the sample: entries with a label image are relabelled by what the crop contains;
-// others keep the whole image's labels. The latter is an approximation: a crop may cut away every
-// pixel of a labelled class (the loss then sees a false positive label); min_scale bounds how much
-// is cut.
-std::vector<int> SampleClasses(const ImageList& list, const ImageListEntry& entry,
-                               const cv::Rect& roi, const cv::Size& size) {
-  const bool whole = roi == cv::Rect(0, 0, size.width, size.height);
-  if (entry.label_image.empty() || whole) return entry.classes;
-  const cv::Mat ids = ReadSingleChannel(entry.label_image, size, "a label image");
+// Classes in `roi` of the label image `ids`, mapped to the list's classes (label_to_class).
+std::vector<int> RoiClasses(const ImageList& list, const cv::Mat& ids, const cv::Rect& roi) {
   if (list.label_to_class.empty()) {
     return CropLabels(ids, roi, list.num_classes(), list.label_min_fraction);
   }
@@ -116,6 +109,41 @@ std::vector<int> SampleClasses(const ImageList& list, const ImageListEntry& entr
   std::sort(classes.begin(), classes.end());
   classes.erase(std::unique(classes.begin(), classes.end()), classes.end());
   return classes;
+}
+
+// Labels of the sample: entries with a label image are relabelled by what the crop contains;
+// others keep the whole image's labels. The latter is an approximation: a crop may cut away every
+// pixel of a labelled class (the loss then sees a false positive label); min_scale bounds how much
+// is cut. With a label grid (and a label image), also the labels of each cell of the crop, in the
+// sample's frame: a flipped sample's column c is the crop's column cols - 1 - c.
+void LabelSample(const ImageList& list, const ImageListEntry& entry, const cv::Rect& roi,
+                 const cv::Size& size, const AugmentOptions& options, bool flip, Sample* sample) {
+  const bool whole = roi == cv::Rect(0, 0, size.width, size.height);
+  const bool grid = options.label_grid_cols > 0 && !entry.label_image.empty();
+  if (entry.label_image.empty() || (whole && !grid)) {
+    sample->classes = entry.classes;
+    return;
+  }
+  const cv::Mat ids = ReadSingleChannel(entry.label_image, size, "a label image");
+  sample->classes = whole ? entry.classes : RoiClasses(list, ids, roi);
+  if (!grid) return;
+  const int cols = options.label_grid_cols;
+  const int rows = options.label_grid_rows;
+  MOSLAM_CHECK(roi.width >= cols && roi.height >= rows)
+      << "a " << roi.width << "x" << roi.height << " crop cannot hold a " << cols << "x" << rows
+      << " label grid";
+  sample->cell_classes.assign(static_cast<size_t>(rows) * cols, {});
+  for (int r = 0; r < rows; ++r) {
+    const int y0 = roi.y + r * roi.height / rows;
+    const int y1 = roi.y + (r + 1) * roi.height / rows;
+    for (int c = 0; c < cols; ++c) {
+      const int x0 = roi.x + c * roi.width / cols;
+      const int x1 = roi.x + (c + 1) * roi.width / cols;
+      const int out_c = flip ? cols - 1 - c : c;
+      sample->cell_classes[static_cast<size_t>(r) * cols + out_c] =
+          RoiClasses(list, ids, cv::Rect(x0, y0, x1 - x0, y1 - y0));
+    }
+  }
 }
 
 }  // namespace
@@ -135,6 +163,13 @@ void AugmentOptions::Check() const {
   CheckRange(brightness, 0.0, 0.99, false, "brightness");
   CheckRange(contrast, 0.0, 0.99, false, "contrast");
   CheckRange(saturation, 0.0, 0.99, false, "saturation");
+  if (label_grid_cols < 0 || label_grid_rows < 0 ||
+      (label_grid_cols == 0) != (label_grid_rows == 0)) {
+    ThrowInput(
+        "AugmentOptions.label_grid_cols/label_grid_rows: both 0 (no grid) or both >= 1, got "
+        "{}x{}",
+        label_grid_cols, label_grid_rows);
+  }
 }
 
 Sample LoadSample(const ImageList& list, int index, const AugmentOptions& options,
@@ -155,7 +190,7 @@ Sample LoadSample(const ImageList& list, int index, const AugmentOptions& option
   const cv::Size out_size(options.output_width, options.output_height);
   Sample sample;
   sample.index = index;
-  sample.classes = SampleClasses(list, entry, roi, image.size());
+  LabelSample(list, entry, roi, image.size(), options, flip, &sample);
   sample.image = ResizeImage(image(roi), out_size);
   if (!cue.empty()) {
     // INTER_NEAREST_EXACT rather than INTER_NEAREST: the latter samples floor(x * scale), half a
@@ -191,9 +226,11 @@ torch::Tensor ToInputTensor(const cv::Mat& image) {
       .clone();
 }
 
-Batch MakeBatch(const std::vector<Sample>& samples, int num_classes) {
+Batch MakeBatch(const std::vector<Sample>& samples, int num_classes, int grid_rows, int grid_cols) {
   MOSLAM_CHECK(!samples.empty()) << "MakeBatch: no samples";
   MOSLAM_CHECK(num_classes > 0);
+  MOSLAM_CHECK(grid_rows >= 0 && grid_cols >= 0 && (grid_rows == 0) == (grid_cols == 0));
+  const size_t cells = static_cast<size_t>(grid_rows) * grid_cols;
   const cv::Size size = samples.front().image.size();
   const bool with_cues = !samples.front().cue.empty();
   const auto n = static_cast<int64_t>(samples.size());
@@ -202,6 +239,7 @@ Batch MakeBatch(const std::vector<Sample>& samples, int num_classes) {
   batch.labels = torch::zeros({n, num_classes}, torch::kFloat32);
   auto labels = batch.labels.accessor<float, 2>();
   if (with_cues) batch.cues = torch::empty({n, size.height, size.width}, torch::kInt64);
+  if (cells > 0) batch.cell_labels = torch::zeros({n, num_classes, grid_rows, grid_cols});
   for (int64_t i = 0; i < n; ++i) {
     const Sample& s = samples[i];
     MOSLAM_CHECK(s.image.size() == size) << "MakeBatch: samples differ in size";
@@ -210,6 +248,18 @@ Batch MakeBatch(const std::vector<Sample>& samples, int num_classes) {
     for (const int c : s.classes) {
       MOSLAM_CHECK(c >= 0 && c < num_classes) << "class " << c << " of " << num_classes;
       labels[i][c] = 1.0f;
+    }
+    if (cells > 0) {
+      MOSLAM_CHECK(s.cell_classes.size() == cells)
+          << "MakeBatch: sample " << i << " has " << s.cell_classes.size() << " cell labels, the "
+          << grid_rows << "x" << grid_cols << " grid " << cells;
+      auto cell = batch.cell_labels.accessor<float, 4>();
+      for (size_t k = 0; k < cells; ++k) {
+        for (const int c : s.cell_classes[k]) {
+          MOSLAM_CHECK(c >= 0 && c < num_classes) << "class " << c << " of " << num_classes;
+          cell[i][c][k / grid_cols][k % grid_cols] = 1.0f;
+        }
+      }
     }
     if (with_cues) {
       MOSLAM_CHECK(s.cue.type() == CV_8UC1 && s.cue.size() == size) << "cue of sample " << i;

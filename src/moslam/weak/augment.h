@@ -26,6 +26,13 @@ struct AugmentOptions {
   double contrast = 0.2;          // +- fraction
   double saturation = 0.2;        // +- fraction (colour images)
   bool grey = false;              // convert to grey (replicated to three channels in tensors)
+  // Crop-level labels of a grid of cells over each sample (0 x 0: none): entries with a label
+  // image also get, for each of label_grid_cols x label_grid_rows equal cells of the sample, the
+  // classes that cell contains (CropLabels' rule) — the labels a crop of that cell would have.
+  // The classifier pools its CAMs over the same cells (TrainClassifier), so it learns at the
+  // cells' scale without the image being cropped and enlarged.
+  int label_grid_cols = 0;
+  int label_grid_rows = 0;
 
   void Check() const;  // InputError naming the field
 };
@@ -34,7 +41,10 @@ struct Sample {
   cv::Mat image;             // CV_8UC3 BGR (grey replicated when grey), output size
   cv::Mat cue;               // CV_8UC1 labels (255 = unknown) of output size, when a cue was given
   std::vector<int> classes;  // image-level labels of the (cropped) sample
-  int index = -1;            // entry index
+  // With a label grid and a label image: the classes of each cell, row-major, in the sample's
+  // (flipped) frame; empty otherwise.
+  std::vector<std::vector<int>> cell_classes;
+  int index = -1;  // entry index
 };
 
 // Reads entry `index` of `list` (and `cue_path` when not empty), augments it with `rng`.
@@ -51,14 +61,19 @@ Sample LoadSample(const ImageList& list, int index, const AugmentOptions& option
                   std::mt19937_64& rng, bool augment, const std::string& cue_path = "");
 
 struct Batch {
-  torch::Tensor images;      // N x 3 x H x W float, RGB in [-1, 1]
-  torch::Tensor labels;      // N x C float multi-hot
-  torch::Tensor cues;        // N x H x W int64 (255 = unknown), undefined without cues
+  torch::Tensor images;  // N x 3 x H x W float, RGB in [-1, 1]
+  torch::Tensor labels;  // N x C float multi-hot
+  torch::Tensor cues;    // N x H x W int64 (255 = unknown), undefined without cues
+  // N x C x rows x cols float multi-hot of the samples' cell_classes; undefined without them.
+  torch::Tensor cell_labels;
   std::vector<cv::Mat> bgr;  // the samples' images (the CRF of the constrain loss needs them)
   std::vector<int> indices;
 };
 
-Batch MakeBatch(const std::vector<Sample>& samples, int num_classes);
+// `grid_rows` x `grid_cols` is the samples' label grid (0 x 0: none; every sample must then carry
+// its cell labels).
+Batch MakeBatch(const std::vector<Sample>& samples, int num_classes, int grid_rows = 0,
+                int grid_cols = 0);
 
 // BGR (or grey) 8-bit image -> 3 x H x W float tensor, RGB in [-1, 1].
 torch::Tensor ToInputTensor(const cv::Mat& image);

@@ -146,6 +146,70 @@ TEST(AugmentTest, CropsOfLabelledImagesAreRelabelledByWhatTheyContain) {
   EXPECT_LT(with_car, 50);
 }
 
+TEST(AugmentTest, LabelGridCellsAreLabelledByWhatTheyContainInTheSamplesFrame) {
+  // Class 1 fills the left quarter of a class-0 image. With a 2x1 grid the whole image's left
+  // cell holds both classes and its right cell class 0 only; flipped, the two cells swap; a crop
+  // of the right three quarters has no class 1 anywhere.
+  TempDir dir;
+  cv::Mat image(kRows, kCols, CV_8UC3, cv::Scalar(100, 100, 100));
+  cv::Mat ids(kRows, kCols, CV_8UC1, cv::Scalar(0));
+  image(cv::Rect(0, 0, kCols / 4, kRows)).setTo(cv::Scalar(0, 0, 255));
+  ids(cv::Rect(0, 0, kCols / 4, kRows)).setTo(1);
+  cv::imwrite(dir.path() + "/image.png", image);
+  cv::imwrite(dir.path() + "/ids.png", ids);
+  ImageList list;
+  list.class_names = {"road", "car"};
+  list.movable = {false, true};
+  list.entries.push_back({dir.path() + "/image.png", {0, 1}, dir.path() + "/ids.png"});
+  AugmentOptions options = SmallOutput();
+  options.brightness = options.contrast = options.saturation = 0.0;
+  options.label_grid_cols = 2;
+  options.label_grid_rows = 1;
+  options.crop_probability = 0.0;
+  std::mt19937_64 rng(5);
+  int flipped = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Sample s = LoadSample(list, 0, options, rng, true);
+    ASSERT_EQ(s.cell_classes.size(), 2u);
+    // The red object is on the left of the sample unless it was flipped.
+    const bool red_left = s.image.at<cv::Vec3b>(s.image.rows / 2, 2)[2] > 200;
+    flipped += !red_left;
+    EXPECT_THAT(s.cell_classes[red_left ? 0 : 1], ElementsAre(0, 1)) << "trial " << trial;
+    EXPECT_THAT(s.cell_classes[red_left ? 1 : 0], ElementsAre(0)) << "trial " << trial;
+  }
+  EXPECT_GT(flipped, 0);
+  EXPECT_LT(flipped, 20);
+  // Crops: every cell's labels are those of its part of the crop, whatever the crop.
+  options.crop_probability = 1.0;
+  options.min_scale = 0.5;
+  options.flip = false;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Sample s = LoadSample(list, 0, options, rng, true);
+    ASSERT_EQ(s.cell_classes.size(), 2u);
+    for (int c = 0; c < 2; ++c) {
+      const cv::Mat cell =
+          s.image(cv::Rect(c * s.image.cols / 2, 0, s.image.cols / 2, s.image.rows));
+      std::vector<cv::Mat> channels;
+      cv::split(cell, channels);
+      const bool red = cv::countNonZero(channels[2] - channels[1] > 60) > 0;
+      EXPECT_EQ(std::count(s.cell_classes[c].begin(), s.cell_classes[c].end(), 1) > 0, red)
+          << "trial " << trial << " cell " << c;
+    }
+  }
+  // The batch carries them as N x C x rows x cols.
+  options.crop_probability = 0.0;
+  const Sample s = LoadSample(list, 0, options, rng, false);
+  const Batch batch = MakeBatch({s, s}, 2, 1, 2);
+  ASSERT_EQ(batch.cell_labels.sizes(), (std::vector<int64_t>{2, 2, 1, 2}));
+  EXPECT_FLOAT_EQ(batch.cell_labels[1][1][0][0].item<float>(), 1.0f);
+  EXPECT_FLOAT_EQ(batch.cell_labels[1][1][0][1].item<float>(), 0.0f);
+  EXPECT_FLOAT_EQ(batch.cell_labels[1][0][0][1].item<float>(), 1.0f);
+  EXPECT_FALSE(MakeBatch({s}, 2).cell_labels.defined());
+  // Entries without a label image get no cell labels.
+  list.entries[0].label_image.clear();
+  EXPECT_TRUE(LoadSample(list, 0, options, rng, false).cell_classes.empty());
+}
+
 TEST(AugmentTest, ASeedFixesTheSample) {
   TempDir dir;
   std::string cue_path;
@@ -252,6 +316,9 @@ TEST(AugmentTest, OptionsCheckNamesTheField) {
   options = AugmentOptions();
   options.saturation = -0.1;
   EXPECT_THAT(ErrorOf([&] { options.Check(); }), HasSubstr("saturation"));
+  options = AugmentOptions();
+  options.label_grid_cols = 3;
+  EXPECT_THAT(ErrorOf([&] { options.Check(); }), HasSubstr("label_grid_cols"));
   EXPECT_NO_THROW(AugmentOptions().Check());
 }
 

@@ -123,6 +123,18 @@ TrainSummary TrainClassifier(const ClassifierTrainOptions& options_in) {
   at::set_num_threads(common.threads);
   torch::manual_seed(common.seed);
   const ImageList list = internal::LoadTrainingList(common);
+  const int grid_rows = common.augment.label_grid_rows;
+  const int grid_cols = common.augment.label_grid_cols;
+  if (grid_cols > 0) {
+    for (const ImageListEntry& entry : list.entries) {
+      if (entry.label_image.empty()) {
+        ThrowInput(
+            "train classifier: a label grid needs crop labels, which only data with label "
+            "images (CamVid) has; {} has none",
+            entry.image);
+      }
+    }
+  }
   net::ClassifierNet net = BuildClassifier(options, list, &common);
   const torch::Device device = internal::TrainingDevice();
   net->to(device);
@@ -141,10 +153,18 @@ TrainSummary TrainClassifier(const ClassifierTrainOptions& options_in) {
   spec.step = [&](const std::vector<int>& indices, std::mt19937_64& rng) {
     std::vector<Sample> samples;
     for (int i : indices) samples.push_back(LoadSample(list, i, common.augment, rng, true));
-    const Batch batch = MakeBatch(samples, list.num_classes());
+    const Batch batch = MakeBatch(samples, list.num_classes(), grid_rows, grid_cols);
     const torch::Tensor labels = batch.labels.to(device);
     const net::ClassifierOutput out = net->forward(batch.images.to(device));
-    const torch::Tensor loss = torch::binary_cross_entropy_with_logits(out.logits, labels);
+    torch::Tensor loss = torch::binary_cross_entropy_with_logits(out.logits, labels);
+    if (grid_cols > 0) {
+      // Each cell is a crop labelled by what it contains: its logit is the CAM's mean over the
+      // cell, as the image's logit is the CAM's mean over the image (ClassifierNet).
+      const torch::Tensor cell_logits =
+          torch::adaptive_avg_pool2d(out.cams, {grid_rows, grid_cols});
+      loss =
+          loss + torch::binary_cross_entropy_with_logits(cell_logits, batch.cell_labels.to(device));
+    }
     optimizer->zero_grad();
     loss.backward();
     optimizer->step();
@@ -159,7 +179,8 @@ TrainSummary TrainClassifier(const ClassifierTrainOptions& options_in) {
   spec.save_model = [&](const std::string& path) { net::SaveClassifier(path, net); };
   const TrainSummary summary = internal::RunTrainingLoop(common, spec);
   WritePreviews(net, list, common);
-  internal::WriteReport(common, "classifier", summary, net->config(), list.entries.size());
+  internal::WriteReport(common, "classifier", summary, net->config(), list.entries.size(),
+                        {{"label_grid", {grid_cols, grid_rows}}});
   return summary;
 }
 

@@ -113,6 +113,26 @@ std::vector<uint8_t> SeedMapping(const ImageList& from, const std::vector<std::s
   return mapping;
 }
 
+// Per cell of the label grid: whether its labels list a movable class of `list`.
+std::vector<bool> MovableCells(const ImageList& list,
+                               const std::vector<std::vector<int>>& cell_classes) {
+  std::vector<bool> movable;
+  for (const std::vector<int>& classes : cell_classes) {
+    movable.push_back(std::any_of(classes.begin(), classes.end(),
+                                  [&](int c) { return static_cast<bool>(list.movable[c]); }));
+  }
+  return movable;
+}
+
+void RequireCellLabels(const Sample& sample, const ImageListEntry& entry) {
+  if (sample.cell_classes.empty()) {
+    ThrowInput(
+        "cues: a label grid needs crop labels, which only data with label images (CamVid) "
+        "has; {} has none",
+        entry.image);
+  }
+}
+
 cv::Mat MapSeeds(const cv::Mat& seeds, const std::vector<uint8_t>& mapping) {
   cv::Mat out;
   cv::LUT(seeds, mapping, out);
@@ -161,6 +181,10 @@ cv::Mat WithBackgroundPlane(const cv::Mat& cams, int background) {
 struct CueStats {
   double pixels = 0, seeded = 0, correct = 0, labelled_seeded = 0;
   std::map<int, double> per_class_seeded, per_class_correct;
+  // Per labelled class: its pixels, and how many of them were seeded as each class (the recall
+  // of a class, and which wrong label takes its pixels).
+  std::map<int, double> per_class_labelled;
+  std::map<int, std::map<int, double>> per_class_seeded_as;
 };
 
 void AddEvaluation(const cv::Mat& cue, const cv::Mat& labels, const std::vector<int>& mapping,
@@ -168,9 +192,11 @@ void AddEvaluation(const cv::Mat& cue, const cv::Mat& labels, const std::vector<
   for (int y = 0; y < cue.rows; ++y) {
     for (int x = 0; x < cue.cols; ++x) {
       const int c = cue.at<uint8_t>(y, x);
-      if (c == kUnknown) continue;
       const int truth = mapping[labels.at<uint8_t>(y, x)];
       if (truth < 0) continue;
+      stats->per_class_labelled[truth] += 1;
+      if (c == kUnknown) continue;
+      stats->per_class_seeded_as[truth][c] += 1;
       stats->labelled_seeded += 1;
       stats->per_class_seeded[c] += 1;
       if (truth == c) {
@@ -235,10 +261,14 @@ class CueWriter {
   }
 
   void Finish(const std::vector<std::string>& models) const {
-    nlohmann::json report = {{"classes", seg_classes_},
-                             {"images", list_.entries.size()},
-                             {"models", models},
-                             {"seeded_fraction", stats_.seeded / std::max(1.0, stats_.pixels)}};
+    nlohmann::json report = {
+        {"classes", seg_classes_},
+        {"images", list_.entries.size()},
+        {"models", models},
+        {"seeded_fraction", stats_.seeded / std::max(1.0, stats_.pixels)},
+        {"label_grid", {options_.label_grid_cols, options_.label_grid_rows}},
+        {"cell_max", options_.cell_max},
+        {"no_background_in_movable_cells", options_.no_background_in_movable_cells}};
     if (!options_.segmenter_model.empty()) {
       report["self_training"] = {{"confidence", options_.confidence},
                                  {"fallback_cues", options_.fallback_cues},
@@ -260,6 +290,19 @@ class CueWriter {
         spdlog::info("cues: {} seeded on {:.1f} % of pixels, precision {:.3f}", seg_classes_[c],
                      100.0 * class_pixels_[c] / std::max(1.0, stats_.pixels),
                      stats_.per_class_correct.at(c) / n);
+      }
+      for (const auto& [truth, n] : stats_.per_class_labelled) {
+        const auto it = stats_.per_class_seeded_as.find(truth);
+        std::string as;
+        for (size_t c = 0; c < seg_classes_.size(); ++c) {
+          const double k = it == stats_.per_class_seeded_as.end() || !it->second.count(c)
+                               ? 0.0
+                               : it->second.at(c);
+          report["class_seeded_as"][seg_classes_[truth]][seg_classes_[c]] = k / n;
+          as += fmt::format(" {} {:.3f}", seg_classes_[c], k / n);
+        }
+        spdlog::info("cues: {} pixels ({:.1f} % of all) seeded as:{}", seg_classes_[truth],
+                     100.0 * n / std::max(1.0, stats_.pixels), as);
       }
     }
     std::ofstream(fs::path(options_.out) / "cues.json") << report.dump(2) << "\n";
@@ -352,6 +395,9 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
   AugmentOptions resize;
   resize.output_width = net->config().input_width;
   resize.output_height = net->config().input_height;
+  resize.label_grid_cols = options.label_grid_cols;
+  resize.label_grid_rows = options.label_grid_rows;
+  resize.Check();
   semantic::DenseCrfOptions crf_options = options.crf;
   crf_options.depth = !options.depth_folder.empty();
   crf_options.num_threads = std::max(1, options.threads);
@@ -366,12 +412,23 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
         internal::AugmentedProbabilities(net, sample.image, options.scales, options.flip);
     const int sizes[] = {static_cast<int>(probabilities.size(0)), sample.image.rows,
                          sample.image.cols};
-    const cv::Mat planar(3, sizes, CV_32F, probabilities.data_ptr<float>());
+    cv::Mat planar(3, sizes, CV_32F, probabilities.data_ptr<float>());
+    if (options.label_grid_cols > 0) {
+      RequireCellLabels(sample, list.entries[i]);
+      // The background is in every cell: only the listed classes are removed where absent.
+      std::vector<std::vector<int>> cell_classes = sample.cell_classes;
+      for (std::vector<int>& classes : cell_classes) classes.push_back(background);
+      SuppressAbsentInCells(planar, cell_classes, options.label_grid_rows, options.label_grid_cols);
+    }
     const cv::Mat depth_m = options.depth_folder.empty()
                                 ? cv::Mat()
                                 : DepthOf(list.entries[i], options, sample.image.size());
     cv::Mat cue = CuesFromSegmentation(planar, sample.classes, background, sample.image, depth_m,
                                        crf, options.confidence);
+    if (options.no_background_in_movable_cells) {
+      ClearLabelInCells(cue, MovableCells(list, sample.cell_classes), options.label_grid_rows,
+                        options.label_grid_cols, background);
+    }
     if (MissesALabelledClass(cue, sample.classes, background, options.min_class_pixels)) {
       ++missed;
       cue = FallbackCue(options.fallback_cues, i, cue.size());
@@ -401,10 +458,15 @@ void GenerateCues(const CueGenerationOptions& options) {
   options.data.Check();
   options.cues.Check();
   at::set_num_threads(options.threads);
+  if ((options.cell_max || options.no_background_in_movable_cells) &&
+      options.label_grid_cols == 0) {
+    throw InputError("cues: --cell-max and --no-background-in-movable-cells need a label grid");
+  }
   if (!options.segmenter_model.empty()) {
     if (!options.colour_model.empty() || !options.grey_model.empty()) {
       throw InputError("cues: give either --segmenter or classifier models, not both");
     }
+    if (options.cell_max) throw InputError("cues: --cell-max is for classifier cues only");
     GenerateCuesFromSegmenter(options);
     return;
   }
@@ -423,10 +485,18 @@ void GenerateCues(const CueGenerationOptions& options) {
   const std::vector<std::string> seg_classes = SegmenterClasses(list);
   const std::vector<uint8_t> to_seg = SeedMapping(cam_list, seg_classes);
   const int background = cam_list.background.empty() ? -1 : cam_list.num_classes();
+  const auto seg_background_it = std::find(seg_classes.begin(), seg_classes.end(), "background");
+  const int seg_background = static_cast<int>(seg_background_it - seg_classes.begin());
+  if (options.no_background_in_movable_cells && seg_background_it == seg_classes.end()) {
+    throw InputError("cues: --no-background-in-movable-cells needs a background class");
+  }
   const net::NetConfig& config = models[0].net->config();
   AugmentOptions resize;
   resize.output_width = config.input_width;
   resize.output_height = config.input_height;
+  resize.label_grid_cols = options.label_grid_cols;
+  resize.label_grid_rows = options.label_grid_rows;
+  resize.Check();
   CueWriter writer(options, list, seg_classes);
   Progress progress("cues", list.entries.size(), 10.0, "img");
   std::mt19937_64 rng(1);
@@ -441,10 +511,19 @@ void GenerateCues(const CueGenerationOptions& options) {
         cv::cvtColor(sample.image, grey, cv::COLOR_BGR2GRAY);
         cv::cvtColor(grey, input, cv::COLOR_GRAY2BGR);
       }
-      const cv::Mat cams = internal::ComputeCams(model.net, input, nullptr);
-      const cv::Mat seeds = MapSeeds(SeedsFromCams(WithBackgroundPlane(cams, background),
-                                                   sample.classes, background, options.cues),
-                                     to_seg);
+      cv::Mat cams = internal::ComputeCams(model.net, input, nullptr);
+      if (options.label_grid_cols > 0) {
+        RequireCellLabels(sample, cam_list.entries[i]);
+        SuppressAbsentInCells(cams, sample.cell_classes, options.label_grid_rows,
+                              options.label_grid_cols, options.cell_max);
+      }
+      cv::Mat seeds = MapSeeds(SeedsFromCams(WithBackgroundPlane(cams, background), sample.classes,
+                                             background, options.cues),
+                               to_seg);
+      if (options.no_background_in_movable_cells) {
+        ClearLabelInCells(seeds, MovableCells(cam_list, sample.cell_classes),
+                          options.label_grid_rows, options.label_grid_cols, seg_background);
+      }
       refined.push_back(RefineWithSuperpixels(seeds, input, options.cues));
       if (static_cast<int>(i) < options.preview_images) {
         for (int c : sample.classes) {

@@ -116,6 +116,61 @@ cv::Mat SeedsFromCams(const cv::Mat& cams, const std::vector<int>& present, int 
   return seeds;
 }
 
+namespace {
+
+cv::Rect GridCell(int r, int c, int rows, int cols, int height, int width) {
+  return cv::Rect(c * width / cols, r * height / rows, (c + 1) * width / cols - c * width / cols,
+                  (r + 1) * height / rows - r * height / rows);
+}
+
+}  // namespace
+
+void SuppressAbsentInCells(cv::Mat& cams, const std::vector<std::vector<int>>& cell_classes,
+                           int rows, int cols, bool per_cell_max) {
+  if (cams.dims != 3 || cams.type() != CV_32F || !cams.isContinuous()) {
+    ThrowInput("SuppressAbsentInCells: cams must be a continuous 3-D {{C, H, W}} CV_32F matrix");
+  }
+  if (rows < 1 || cols < 1 || cell_classes.size() != static_cast<size_t>(rows) * cols) {
+    ThrowInput("SuppressAbsentInCells: {} cell label lists for a {}x{} grid", cell_classes.size(),
+               cols, rows);
+  }
+  const int num_classes = cams.size[0];
+  const int height = cams.size[1];
+  const int width = cams.size[2];
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const std::vector<int>& present = cell_classes[static_cast<size_t>(r) * cols + c];
+      const cv::Rect cell = GridCell(r, c, rows, cols, height, width);
+      for (int k = 0; k < num_classes; ++k) {
+        cv::Mat region = cv::Mat(height, width, CV_32F, cams.ptr(k))(cell);
+        if (std::find(present.begin(), present.end(), k) == present.end()) {
+          region.setTo(0.0f);
+        } else if (per_cell_max) {
+          cv::max(region, 0.0f, region);
+          double max_value = 0.0;
+          cv::minMaxLoc(region, nullptr, &max_value);
+          if (max_value > 0.0) region *= 1.0 / max_value;
+        }
+      }
+    }
+  }
+}
+
+void ClearLabelInCells(cv::Mat& seeds, const std::vector<bool>& cells, int rows, int cols,
+                       int label) {
+  if (seeds.type() != CV_8UC1) ThrowInput("ClearLabelInCells: seeds must be CV_8UC1");
+  if (rows < 1 || cols < 1 || cells.size() != static_cast<size_t>(rows) * cols) {
+    ThrowInput("ClearLabelInCells: {} cell flags for a {}x{} grid", cells.size(), cols, rows);
+  }
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      if (!cells[static_cast<size_t>(r) * cols + c]) continue;
+      cv::Mat region = seeds(GridCell(r, c, rows, cols, seeds.rows, seeds.cols));
+      region.setTo(kUnknown, region == label);
+    }
+  }
+}
+
 cv::Mat RefineWithSuperpixels(const cv::Mat& seeds, const cv::Mat& image,
                               const CueOptions& options) {
   options.Check();

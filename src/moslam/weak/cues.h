@@ -47,6 +47,23 @@ struct CueOptions {
 cv::Mat SeedsFromCams(const cv::Mat& cams, const std::vector<int>& present, int background,
                       const CueOptions& options);
 
+// Crop-level suppression: `cell_classes` lists the classes of each of rows x cols equal cells of
+// the image (row-major; augment.h's label grid), and every class's CAM in `cams` ({C, H, W}
+// CV_32F) is set to 0 inside the cells that do not list it, so that SeedsFromCams neither seeds
+// it there nor normalizes it by a maximum found there. Cell boundaries follow LabelSample's
+// integer split (x0 = c * W / cols). With `per_cell_max`, a listed class's CAM is also ReLU'd and
+// divided by its maximum within each cell, so that every cell that lists a class gets seeds of it
+// (each cell is treated as the crop it was labelled as; otherwise the image's most salient
+// instance sets the scale and fainter ones are never seeded). InputError when cell_classes does
+// not have rows x cols lists.
+void SuppressAbsentInCells(cv::Mat& cams, const std::vector<std::vector<int>>& cell_classes,
+                           int rows, int cols, bool per_cell_max = false);
+
+// Seeds equal to `label` inside the cells flagged in `cells` (rows x cols, row-major, the split of
+// SuppressAbsentInCells) become kUnknown. InputError when cells does not have rows x cols flags.
+void ClearLabelInCells(cv::Mat& seeds, const std::vector<bool>& cells, int rows, int cols,
+                       int label);
+
 // SLIC superpixel refinement of `seeds` on `image` (CV_8UC3 or CV_8UC1 of the seeds' size).
 cv::Mat RefineWithSuperpixels(const cv::Mat& seeds, const cv::Mat& image,
                               const CueOptions& options);

@@ -351,4 +351,24 @@ TEST(Cues, RenderingsHaveTheImageSize) {
 }
 
 }  // namespace
+TEST(CuesTest, CellLabelsSuppressAbsentClassesPerCell) {
+  // Two classes, CAMs 1 everywhere, a 2x2 grid on a 6x4 map: class 0 listed in the top-left cell
+  // only, class 1 in every cell but the bottom-right one.
+  const int sizes[] = {2, 4, 6};
+  cv::Mat cams(3, sizes, CV_32F, cv::Scalar(1.0f));
+  SuppressAbsentInCells(cams, {{0, 1}, {1}, {1}, {}}, 2, 2);
+  const cv::Mat c0(4, 6, CV_32F, cams.ptr(0));
+  const cv::Mat c1(4, 6, CV_32F, cams.ptr(1));
+  EXPECT_EQ(cv::countNonZero(c0), 6);
+  EXPECT_EQ(cv::countNonZero(c0(cv::Rect(0, 0, 3, 2))), 6);
+  EXPECT_EQ(cv::countNonZero(c1), 18);
+  EXPECT_EQ(cv::countNonZero(c1(cv::Rect(3, 2, 3, 2))), 0);
+  // So the seeds follow: class 0 wins only in its cell (ties go to the lowest class).
+  const cv::Mat seeds = SeedsFromCams(cams, {0, 1}, -1, CueOptions());
+  EXPECT_EQ(seeds.at<uint8_t>(0, 0), 0);
+  EXPECT_EQ(seeds.at<uint8_t>(0, 5), 1);
+  EXPECT_EQ(seeds.at<uint8_t>(3, 5), kUnknown);
+  EXPECT_THROW(SuppressAbsentInCells(cams, {{0}}, 2, 2), InputError);
+}
+
 }  // namespace moslam::weak

@@ -25,9 +25,11 @@ void RequireLogits(const torch::Tensor& logits, const char* function) {
 
 }  // namespace
 
-torch::Tensor SeedingLoss(const torch::Tensor& logits, const torch::Tensor& cues,
-                          bool class_balanced) {
+torch::Tensor SeedingLoss(const torch::Tensor& logits, const torch::Tensor& cues, double balance) {
   RequireLogits(logits, "SeedingLoss");
+  if (!(balance >= 0.0 && balance <= 1.0)) {
+    ThrowInput("SeedingLoss: balance must be in [0, 1], got {}", balance);
+  }
   const int64_t num_classes = logits.size(1);
   if (!cues.defined() || cues.dim() != 3 || cues.size(0) != logits.size(0) ||
       cues.size(1) != logits.size(2) || cues.size(2) != logits.size(3)) {
@@ -45,17 +47,19 @@ torch::Tensor SeedingLoss(const torch::Tensor& logits, const torch::Tensor& cues
     // parameter gets a (zero) gradient.
     return logits.sum() * 0.0;
   }
-  // |S_c| over the batch, then each seeded pixel weighs 1 / (|C'| |S_c|): the formula's two
-  // averages folded into one weighted sum.
+  // |S_c| over the batch, then each seeded pixel of class c weighs |S_c|^-b / sum_k |S_k|^(1-b);
+  // with b = 1 that is 1 / (|C'| |S_c|), the balanced formula's two averages folded into one
+  // weighted sum, and with b = 0 the plain mean.
   const torch::Tensor labels = torch::where(seeded, c, torch::zeros_like(c));
   const torch::Tensor counts =
       torch::bincount(c.masked_select(seeded), /*weights=*/{}, num_classes).to(logits.dtype());
-  const torch::Tensor num_present = (counts > 0).sum().to(logits.dtype());
-  const torch::Tensor label_counts =
-      counts.clamp_min(1.0).index_select(0, labels.flatten()).view_as(labels);
-  const torch::Tensor weights = class_balanced
-                                    ? seeded.to(logits.dtype()) / label_counts / num_present
-                                    : seeded.to(logits.dtype()) / counts.sum().clamp_min(1.0);
+  const torch::Tensor present = counts > 0;
+  const torch::Tensor class_weight =
+      torch::where(present, counts.clamp_min(1.0).pow(-balance), torch::zeros_like(counts));
+  const torch::Tensor total = (class_weight * counts).sum();
+  const torch::Tensor weights = seeded.to(logits.dtype()) *
+                                class_weight.index_select(0, labels.flatten()).view_as(labels) /
+                                total;
   const torch::Tensor log_probabilities =
       torch::log_softmax(logits, 1).gather(1, labels.unsqueeze(1)).squeeze(1);
   return -(weights.detach() * log_probabilities).sum();

@@ -111,12 +111,34 @@ TEST(Losses, UnbalancedSeedingLossIsThePlainMeanOverSeeds) {
   const torch::Tensor log_p = torch::log_softmax(logits, 1).gather(
       1, torch::where(seeded, cues, torch::zeros_like(cues)).unsqueeze(1));
   const double expected = -log_p.squeeze(1).masked_select(seeded).mean().item<double>();
-  EXPECT_NEAR(SeedingLoss(logits, cues, /*class_balanced=*/false).item<double>(), expected, 1e-12);
+  EXPECT_NEAR(SeedingLoss(logits, cues, /*balance=*/0.0).item<double>(), expected, 1e-12);
   // Its gradient against central differences, as for the balanced form.
-  const auto f = [&](const torch::Tensor& x) { return SeedingLoss(x, cues, false); };
+  const auto f = [&](const torch::Tensor& x) { return SeedingLoss(x, cues, 0.0); };
   const torch::Tensor analytic = AnalyticGradient(f, logits);
   const torch::Tensor numeric = NumericGradient(f, logits, 1e-6);
   EXPECT_LT((analytic - numeric).abs().max().item<double>(), 1e-8);
+}
+
+TEST(Losses, PartlyBalancedSeedingLossWeighsClassesByAPowerOfTheirSeedCount) {
+  // 3 seeds of class 0 and 1 of class 1, one pixel unseeded: with balance b a class-0 seed
+  // weighs 3^-b and the class-1 seed 1, normalized by 3 * 3^-b + 1.
+  torch::manual_seed(5);
+  const torch::Tensor logits = torch::randn({1, 2, 1, 5}, kDouble);
+  const torch::Tensor cues =
+      torch::tensor({0, 0, 0, 1, static_cast<int>(kUnknown)}, torch::kInt64).view({1, 1, 5});
+  const torch::Tensor log_p = torch::log_softmax(logits, 1);
+  const double nll0 = -log_p.index({0, 0, 0, Slice(0, 3)}).sum().item<double>();
+  const double nll1 = -log_p.index({0, 1, 0, 3}).item<double>();
+  for (const double b : {0.0, 0.5, 1.0}) {
+    const double w0 = std::pow(3.0, -b);
+    const double expected = (w0 * nll0 + nll1) / (3.0 * w0 + 1.0);
+    EXPECT_NEAR(SeedingLoss(logits, cues, b).item<double>(), expected, 1e-12) << "balance " << b;
+  }
+  const auto f = [&](const torch::Tensor& x) { return SeedingLoss(x, cues, 0.5); };
+  EXPECT_LT(
+      (AnalyticGradient(f, logits) - NumericGradient(f, logits, 1e-6)).abs().max().item<double>(),
+      1e-8);
+  EXPECT_THROW(SeedingLoss(logits, cues, 1.5), InputError);
 }
 
 TEST(Losses, SeedingLossWithoutSeedsIsAZeroWithAGraph) {

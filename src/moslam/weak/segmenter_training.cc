@@ -203,7 +203,7 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
           ScaledCrf(options.crf, static_cast<double>(batch.images.size(3)) / w));
     }
     const torch::Tensor cues = DownsampleCues(batch.cues, h, w).to(device);
-    const torch::Tensor seed = SeedingLoss(logits, cues, options.class_balanced_seeds);
+    const torch::Tensor seed = SeedingLoss(logits, cues, options.seed_balance);
     const torch::Tensor constrain = ConstrainLoss(logits, CrfTargets(logits, batch.bgr, *crf));
     const torch::Tensor classes = torch::binary_cross_entropy_with_logits(out.class_logits, labels);
     const torch::Tensor loss =
@@ -231,7 +231,7 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
                          {"class_weight", options.class_weight},
                          {"grey_probability", options.grey_probability},
                          {"loss_stride", options.loss_stride},
-                         {"class_balanced_seeds", options.class_balanced_seeds}});
+                         {"seed_balance", options.seed_balance}});
   return summary;
 }
 

@@ -80,6 +80,18 @@ struct CueGenerationOptions {
   int preview_images = 12;
   // Optional: pixel-label folder used only to report the cues' precision (evaluation).
   std::string eval_labels;
+  // Crop-level labels at cue time (both rounds; data with label images): the image is
+  // divided into label_grid_cols x label_grid_rows equal cells, and a class absent from a cell's
+  // labels (CropLabels' rule, the labels a crop of that cell would carry) gets no seed there, as
+  // a class absent from the image gets none anywhere. 0 x 0: image-level labels only.
+  int label_grid_cols = 0;
+  int label_grid_rows = 0;
+  // With a label grid (classifier cues): CAMs normalized by their maximum within each cell that
+  // lists the class (SuppressAbsentInCells' per_cell_max), not over the whole image.
+  bool cell_max = false;
+  // With a label grid: no background seeds inside cells whose labels list a movable class (a
+  // crop known to hold a car is where a stuff class's CAM most often spills over the car).
+  bool no_background_in_movable_cells = false;
   // Self-training (a second round; replaces the classifiers when set): cues from a segmenter
   // trained on first-round cues, its softmax with the image-level labels' absent classes removed
   // and refined by `crf` (colour) at the cue size, kept where the CRF's marginal is at least
@@ -124,8 +136,9 @@ struct SegmenterTrainOptions {
   // sees the image's edges at 4x the resolution, so the network learns logits whose upsampling
   // follows the boundaries.
   int loss_stride = 0;
-  // Seeding loss weighting (losses.h): class-balanced as in SEC, or the plain mean over seeds.
-  bool class_balanced_seeds = true;
+  // Seeding loss weighting (SeedingLoss's balance, losses.h): 1 class-balanced as in SEC, 0 the
+  // plain mean over seeds, between: a class's seeds weigh |S_c|^-seed_balance.
+  double seed_balance = 1.0;
   double class_weight = 0.1;  // weight of the auxiliary image-level BCE
   // Probability that a training image is turned grey (replicated to three channels), so that one
   // network serves colour and grey cameras (KITTI odometry's cameras 0 and 1 are grey).

@@ -209,7 +209,7 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   seg.common.epochs = 2;
   seg.cues = second.out;
   seg.loss_stride = 4;
-  seg.class_balanced_seeds = false;
+  seg.seed_balance = 0.0;
   EXPECT_TRUE(fs::exists(TrainSegmenter(seg).model));
   // Where a labelled class is seeded on less than min_class_pixels of the image (here 99 %: every
   // image with two labels, and those with one unless the segmenter floods it), the image takes the
