@@ -371,4 +371,34 @@ TEST(CuesTest, CellLabelsSuppressAbsentClassesPerCell) {
   EXPECT_THROW(SuppressAbsentInCells(cams, {{0}}, 2, 2), InputError);
 }
 
+TEST(CuesTest, PerCellMaximaGiveEveryListedCellItsOwnPeak) {
+  // One class whose CAM is 4 in the left cell and 1 in the right one: normalized over the image,
+  // the right cell never reaches a 0.5 threshold; normalized per cell, both cells peak at 1.
+  const int sizes[] = {1, 2, 4};
+  cv::Mat cams(3, sizes, CV_32F, cv::Scalar(1.0f));
+  cv::Mat plane(2, 4, CV_32F, cams.ptr(0));
+  plane(cv::Rect(0, 0, 2, 2)).setTo(4.0f);
+  cv::Mat image_wide = cams.clone();
+  SuppressAbsentInCells(image_wide, {{0}, {0}}, 1, 2);
+  EXPECT_EQ(SeedsFromCams(image_wide, {0}, -1, CueOptions()).at<uint8_t>(0, 3), kUnknown);
+  SuppressAbsentInCells(cams, {{0}, {0}}, 1, 2, /*per_cell_max=*/true);
+  EXPECT_FLOAT_EQ(plane.at<float>(0, 0), 1.0f);
+  EXPECT_FLOAT_EQ(plane.at<float>(1, 3), 1.0f);
+  EXPECT_EQ(SeedsFromCams(cams, {0}, -1, CueOptions()).at<uint8_t>(0, 3), 0);
+}
+
+TEST(CuesTest, ClearLabelInCellsUnseedsOnlyThatLabelInTheFlaggedCells) {
+  cv::Mat seeds(4, 4, CV_8UC1, cv::Scalar(2));
+  seeds(cv::Rect(0, 0, 1, 4)).setTo(1);
+  // 2x2 grid: the top-left and bottom-right cells flagged.
+  ClearLabelInCells(seeds, {true, false, false, true}, 2, 2, 2);
+  EXPECT_EQ(seeds.at<uint8_t>(0, 0), 1);         // another label stays
+  EXPECT_EQ(seeds.at<uint8_t>(0, 1), kUnknown);  // flagged cell
+  EXPECT_EQ(seeds.at<uint8_t>(0, 3), 2);         // unflagged cell
+  EXPECT_EQ(seeds.at<uint8_t>(3, 1), 2);         // unflagged cell
+  EXPECT_EQ(seeds.at<uint8_t>(3, 3), kUnknown);  // flagged cell
+  EXPECT_EQ(cv::countNonZero(seeds == kUnknown), 2 + 4);
+  EXPECT_THROW(ClearLabelInCells(seeds, {true}, 2, 2, 2), InputError);
+}
+
 }  // namespace moslam::weak
