@@ -139,6 +139,21 @@ TEST_F(TrainingTest, ClassifierLearnsToyTaskAndCamsPeakOnObjects) {
   EXPECT_GE(peaks_inside, peaks * 9 / 10) << peaks_inside << " of " << peaks << " CAM peaks";
 }
 
+TEST_F(TrainingTest, ALabelGridNeedsDataWithLabelImages) {
+  // An image list has image-level labels only: no crop can be labelled, so a grid is refused
+  // before anything is trained, naming the first image.
+  ClassifierTrainOptions options = ToyClassifier(data_, dir_.path() + "/grid", "none");
+  options.common.augment.label_grid_cols = 2;
+  options.common.augment.label_grid_rows = 2;
+  try {
+    TrainClassifier(options);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("label grid"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("000.png"));
+  }
+}
+
 TEST_F(TrainingTest, ResumeContinuesFromTheCheckpoint) {
   MOSLAM_SHARED_OR_SKIP(weights, kWeights);
   ClassifierTrainOptions options = ToyClassifier(data_, dir_.path() + "/resume", weights);
