@@ -134,14 +134,10 @@ void LabelSample(const ImageList& list, const ImageListEntry& entry, const cv::R
       << " label grid";
   sample->cell_classes.assign(static_cast<size_t>(rows) * cols, {});
   for (int r = 0; r < rows; ++r) {
-    const int y0 = roi.y + r * roi.height / rows;
-    const int y1 = roi.y + (r + 1) * roi.height / rows;
     for (int c = 0; c < cols; ++c) {
-      const int x0 = roi.x + c * roi.width / cols;
-      const int x1 = roi.x + (c + 1) * roi.width / cols;
       const int out_c = flip ? cols - 1 - c : c;
       sample->cell_classes[static_cast<size_t>(r) * cols + out_c] =
-          RoiClasses(list, ids, cv::Rect(x0, y0, x1 - x0, y1 - y0));
+          RoiClasses(list, ids, GridCell(roi, r, c, rows, cols));
     }
   }
 }

@@ -56,6 +56,22 @@ AugmentOptions SmallOutput() {
   return options;
 }
 
+// A grey image with a red object of class 1 ("car") at `object` on class 0 ("road"), its CamVid-
+// style id image, and a one-entry list that carries the id image (so crops are relabelled).
+ImageList RedObjectList(const TempDir& dir, const cv::Rect& object) {
+  cv::Mat image(kRows, kCols, CV_8UC3, cv::Scalar(100, 100, 100));
+  cv::Mat ids(kRows, kCols, CV_8UC1, cv::Scalar(0));
+  image(object).setTo(cv::Scalar(0, 0, 255));
+  ids(object).setTo(1);
+  cv::imwrite(dir.path() + "/image.png", image);
+  cv::imwrite(dir.path() + "/ids.png", ids);
+  ImageList list;
+  list.class_names = {"road", "car"};
+  list.movable = {false, true};
+  list.entries.push_back({dir.path() + "/image.png", {0, 1}, dir.path() + "/ids.png"});
+  return list;
+}
+
 TEST(AugmentTest, CueStaysAlignedWithTheAugmentedImage) {
   TempDir dir;
   std::string cue_path;
@@ -115,16 +131,7 @@ TEST(AugmentTest, CropsOfLabelledImagesAreRelabelledByWhatTheyContain) {
   // An object of class 1 (red) in the top-left corner of a class-0 image: crops that miss it
   // lose class 1, crops that contain any of it keep it (a 30-pixel column is above 0.1 %).
   TempDir dir;
-  cv::Mat image(kRows, kCols, CV_8UC3, cv::Scalar(100, 100, 100));
-  cv::Mat ids(kRows, kCols, CV_8UC1, cv::Scalar(0));
-  image(cv::Rect(0, 0, 30, 30)).setTo(cv::Scalar(0, 0, 255));
-  ids(cv::Rect(0, 0, 30, 30)).setTo(1);
-  cv::imwrite(dir.path() + "/image.png", image);
-  cv::imwrite(dir.path() + "/ids.png", ids);
-  ImageList list;
-  list.class_names = {"road", "car"};
-  list.movable = {false, true};
-  list.entries.push_back({dir.path() + "/image.png", {0, 1}, dir.path() + "/ids.png"});
+  const ImageList list = RedObjectList(dir, cv::Rect(0, 0, 30, 30));
   AugmentOptions options = SmallOutput();
   options.crop_probability = 1.0;
   options.brightness = options.contrast = options.saturation = 0.0;
@@ -151,16 +158,7 @@ TEST(AugmentTest, LabelGridCellsAreLabelledByWhatTheyContainInTheSamplesFrame) {
   // cell holds both classes and its right cell class 0 only; flipped, the two cells swap; a crop
   // of the right three quarters has no class 1 anywhere.
   TempDir dir;
-  cv::Mat image(kRows, kCols, CV_8UC3, cv::Scalar(100, 100, 100));
-  cv::Mat ids(kRows, kCols, CV_8UC1, cv::Scalar(0));
-  image(cv::Rect(0, 0, kCols / 4, kRows)).setTo(cv::Scalar(0, 0, 255));
-  ids(cv::Rect(0, 0, kCols / 4, kRows)).setTo(1);
-  cv::imwrite(dir.path() + "/image.png", image);
-  cv::imwrite(dir.path() + "/ids.png", ids);
-  ImageList list;
-  list.class_names = {"road", "car"};
-  list.movable = {false, true};
-  list.entries.push_back({dir.path() + "/image.png", {0, 1}, dir.path() + "/ids.png"});
+  ImageList list = RedObjectList(dir, cv::Rect(0, 0, kCols / 4, kRows));
   AugmentOptions options = SmallOutput();
   options.brightness = options.contrast = options.saturation = 0.0;
   options.label_grid_cols = 2;

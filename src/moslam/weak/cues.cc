@@ -9,6 +9,7 @@
 
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
+#include "moslam/weak/image_list.h"
 
 namespace moslam::weak {
 
@@ -116,15 +117,6 @@ cv::Mat SeedsFromCams(const cv::Mat& cams, const std::vector<int>& present, int 
   return seeds;
 }
 
-namespace {
-
-cv::Rect GridCell(int r, int c, int rows, int cols, int height, int width) {
-  return cv::Rect(c * width / cols, r * height / rows, (c + 1) * width / cols - c * width / cols,
-                  (r + 1) * height / rows - r * height / rows);
-}
-
-}  // namespace
-
 void SuppressAbsentInCells(cv::Mat& cams, const std::vector<std::vector<int>>& cell_classes,
                            int rows, int cols, bool per_cell_max) {
   if (cams.dims != 3 || cams.type() != CV_32F || !cams.isContinuous()) {
@@ -140,7 +132,7 @@ void SuppressAbsentInCells(cv::Mat& cams, const std::vector<std::vector<int>>& c
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
       const std::vector<int>& present = cell_classes[static_cast<size_t>(r) * cols + c];
-      const cv::Rect cell = GridCell(r, c, rows, cols, height, width);
+      const cv::Rect cell = GridCell(cv::Rect(0, 0, width, height), r, c, rows, cols);
       for (int k = 0; k < num_classes; ++k) {
         cv::Mat region = cv::Mat(height, width, CV_32F, cams.ptr(k))(cell);
         if (std::find(present.begin(), present.end(), k) == present.end()) {
@@ -165,7 +157,7 @@ void ClearLabelInCells(cv::Mat& seeds, const std::vector<bool>& cells, int rows,
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
       if (!cells[static_cast<size_t>(r) * cols + c]) continue;
-      cv::Mat region = seeds(GridCell(r, c, rows, cols, seeds.rows, seeds.cols));
+      cv::Mat region = seeds(GridCell(cv::Rect(0, 0, seeds.cols, seeds.rows), r, c, rows, cols));
       region.setTo(kUnknown, region == label);
     }
   }

@@ -200,6 +200,16 @@ std::vector<int> CropLabels(const cv::Mat& label_ids, const cv::Rect& roi, int n
   return present;
 }
 
+cv::Rect GridCell(const cv::Rect& area, int r, int c, int rows, int cols) {
+  MOSLAM_CHECK(rows >= 1 && cols >= 1 && r >= 0 && r < rows && c >= 0 && c < cols)
+      << "cell (" << r << ", " << c << ") of a " << cols << "x" << rows << " grid";
+  const int x0 = area.x + c * area.width / cols;
+  const int x1 = area.x + (c + 1) * area.width / cols;
+  const int y0 = area.y + r * area.height / rows;
+  const int y1 = area.y + (r + 1) * area.height / rows;
+  return cv::Rect(x0, y0, x1 - x0, y1 - y0);
+}
+
 ImageList ReadCamVid(const std::string& root, const std::string& split, double min_fraction) {
   if (!(min_fraction >= 0.0 && min_fraction < 1.0)) {
     ThrowInput("ReadCamVid: min_fraction must be in [0, 1), got {}", min_fraction);

@@ -87,6 +87,11 @@ ImageList ReadCamVid(const std::string& root, const std::string& split,
 std::vector<int> CropLabels(const cv::Mat& label_ids, const cv::Rect& roi, int num_classes,
                             double min_fraction = 0.001);
 
+// Cell (row r, column c) of a rows x cols grid of equal cells over `area`: the integer split
+// x0 = area.x + c * area.width / cols (and likewise for y) that the label grid of augment.h and the
+// per-cell cue operations of cues.h share, so that a cell's labels and its pixels agree.
+cv::Rect GridCell(const cv::Rect& area, int r, int c, int rows, int cols);
+
 // The synthetic generator's training mode folder (rgb/, labels.txt, classes.txt).
 ImageList ReadSyntheticTraining(const std::string& folder);
 
