@@ -208,6 +208,19 @@ Sample LoadSample(const ImageList& list, int index, const AugmentOptions& option
   return sample;
 }
 
+void RequireLabelImages(const ImageList& list, const AugmentOptions& options,
+                        const std::string& what) {
+  if (options.label_grid_cols == 0) return;
+  for (const ImageListEntry& entry : list.entries) {
+    if (entry.label_image.empty()) {
+      ThrowInput(
+          "{}: a label grid needs crop labels, which only data with label images (CamVid) has; "
+          "{} has none",
+          what, entry.image);
+    }
+  }
+}
+
 torch::Tensor ToInputTensor(const cv::Mat& image) {
   MOSLAM_CHECK(image.type() == CV_8UC3 || image.type() == CV_8UC1)
       << "ToInputTensor: 8-bit BGR or grey image expected";

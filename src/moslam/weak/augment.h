@@ -70,6 +70,11 @@ struct Batch {
   std::vector<int> indices;
 };
 
+// InputError naming `what` and the first entry without a label image when `options` has a label
+// grid: crop labels need label images (CamVid); LoadSample would give such entries no cell labels.
+void RequireLabelImages(const ImageList& list, const AugmentOptions& options,
+                        const std::string& what);
+
 // `grid_rows` x `grid_cols` is the samples' label grid (0 x 0: none; every sample must then carry
 // its cell labels).
 Batch MakeBatch(const std::vector<Sample>& samples, int num_classes, int grid_rows = 0,

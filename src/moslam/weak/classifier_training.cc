@@ -125,16 +125,7 @@ TrainSummary TrainClassifier(const ClassifierTrainOptions& options_in) {
   const ImageList list = internal::LoadTrainingList(common);
   const int grid_rows = common.augment.label_grid_rows;
   const int grid_cols = common.augment.label_grid_cols;
-  if (grid_cols > 0) {
-    for (const ImageListEntry& entry : list.entries) {
-      if (entry.label_image.empty()) {
-        ThrowInput(
-            "train classifier: a label grid needs crop labels, which only data with label "
-            "images (CamVid) has; {} has none",
-            entry.image);
-      }
-    }
-  }
+  RequireLabelImages(list, common.augment, "train classifier");
   net::ClassifierNet net = BuildClassifier(options, list, &common);
   const torch::Device device = internal::TrainingDevice();
   net->to(device);

@@ -124,15 +124,6 @@ std::vector<bool> MovableCells(const ImageList& list,
   return movable;
 }
 
-void RequireCellLabels(const Sample& sample, const ImageListEntry& entry) {
-  if (sample.cell_classes.empty()) {
-    ThrowInput(
-        "cues: a label grid needs crop labels, which only data with label images (CamVid) "
-        "has; {} has none",
-        entry.image);
-  }
-}
-
 cv::Mat MapSeeds(const cv::Mat& seeds, const std::vector<uint8_t>& mapping) {
   cv::Mat out;
   cv::LUT(seeds, mapping, out);
@@ -398,6 +389,7 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
   resize.label_grid_cols = options.label_grid_cols;
   resize.label_grid_rows = options.label_grid_rows;
   resize.Check();
+  RequireLabelImages(list, resize, "cues");
   semantic::DenseCrfOptions crf_options = options.crf;
   crf_options.depth = !options.depth_folder.empty();
   crf_options.num_threads = std::max(1, options.threads);
@@ -414,7 +406,6 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
                          sample.image.cols};
     cv::Mat planar(3, sizes, CV_32F, probabilities.data_ptr<float>());
     if (options.label_grid_cols > 0) {
-      RequireCellLabels(sample, list.entries[i]);
       // The background is in every cell: only the listed classes are removed where absent.
       std::vector<std::vector<int>> cell_classes = sample.cell_classes;
       for (std::vector<int>& classes : cell_classes) classes.push_back(background);
@@ -485,9 +476,9 @@ void GenerateCues(const CueGenerationOptions& options) {
   const std::vector<std::string> seg_classes = SegmenterClasses(list);
   const std::vector<uint8_t> to_seg = SeedMapping(cam_list, seg_classes);
   const int background = cam_list.background.empty() ? -1 : cam_list.num_classes();
-  const auto seg_background_it = std::find(seg_classes.begin(), seg_classes.end(), "background");
-  const int seg_background = static_cast<int>(seg_background_it - seg_classes.begin());
-  if (options.no_background_in_movable_cells && seg_background_it == seg_classes.end()) {
+  // SegmenterClasses: the list's classes, then its background when it has one.
+  const int seg_background = list.background.empty() ? -1 : list.num_classes();
+  if (options.no_background_in_movable_cells && seg_background < 0) {
     throw InputError("cues: --no-background-in-movable-cells needs a background class");
   }
   const net::NetConfig& config = models[0].net->config();
@@ -497,6 +488,7 @@ void GenerateCues(const CueGenerationOptions& options) {
   resize.label_grid_cols = options.label_grid_cols;
   resize.label_grid_rows = options.label_grid_rows;
   resize.Check();
+  RequireLabelImages(cam_list, resize, "cues");
   CueWriter writer(options, list, seg_classes);
   Progress progress("cues", list.entries.size(), 10.0, "img");
   std::mt19937_64 rng(1);
@@ -513,7 +505,6 @@ void GenerateCues(const CueGenerationOptions& options) {
       }
       cv::Mat cams = internal::ComputeCams(model.net, input, nullptr);
       if (options.label_grid_cols > 0) {
-        RequireCellLabels(sample, cam_list.entries[i]);
         SuppressAbsentInCells(cams, sample.cell_classes, options.label_grid_rows,
                               options.label_grid_cols, options.cell_max);
       }
