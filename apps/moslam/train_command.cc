@@ -133,6 +133,9 @@ void AddTrainCommand(CLI::App& app) {
   q->add_option("--fallback-cues", cues.fallback_cues,
                 "with --segmenter: cue folder for images where the segmenter misses a labelled "
                 "class (default: such images get no cues)");
+  q->add_flag("--fallback-per-class", cues.fallback_per_class,
+              "with --fallback-cues: only the missed classes' seeds are taken from it, over the "
+              "segmenter's cue");
   q->add_option("--min-class-pixels", cues.min_class_pixels,
                 "with --segmenter: fraction of an image a labelled class must be seeded on")
       ->capture_default_str();
@@ -142,11 +145,11 @@ void AddTrainCommand(CLI::App& app) {
   q->add_option("--depth-factor", cues.depth_factor, "raw depth units per metre")
       ->capture_default_str();
   q->add_option("--scales", cues.scales,
-                "with --segmenter: mean softmax over the image resized by these factors (e.g. "
-                "1,1.5,2)")
+                "mean softmax (--segmenter) or CAMs (classifiers) over the image resized by "
+                "these factors (e.g. 1,1.5,2)")
       ->delimiter(',')
       ->capture_default_str();
-  q->add_flag("--flip", cues.flip, "with --segmenter: also average the mirrored images");
+  q->add_flag("--flip", cues.flip, "also average the mirrored images");
   static std::string crf_config;
   q->add_option("--crf-config", crf_config,
                 "with --segmenter: YAML file of crf.* options (default: the CRF's defaults)");

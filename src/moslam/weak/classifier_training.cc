@@ -20,23 +20,58 @@ namespace fs = std::filesystem;
 
 namespace internal {
 
+namespace {
+
+// {C, H, W} CV_32F copy of a C x H x W CPU float tensor.
+cv::Mat PlanarFromTensor(const torch::Tensor& tensor) {
+  const torch::Tensor t = tensor.to(torch::kCPU, torch::kFloat32).contiguous();
+  const int sizes[] = {static_cast<int>(t.size(0)), static_cast<int>(t.size(1)),
+                       static_cast<int>(t.size(2))};
+  cv::Mat result(3, sizes, CV_32F);
+  std::memcpy(result.data, t.data_ptr<float>(), t.numel() * sizeof(float));
+  return result;
+}
+
+}  // namespace
+
 cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<float>* scores) {
   torch::NoGradGuard no_grad;
   const torch::Device device = net->parameters().front().device();
   const torch::Tensor input = ToInputTensor(image).unsqueeze(0).to(device);
   const net::ClassifierOutput out = net->forward(input);
-  const torch::Tensor cams = net::UpsampleBilinear(out.cams, image.rows, image.cols)
-                                 .squeeze(0)
-                                 .to(torch::kCPU)
-                                 .contiguous();
-  const int sizes[] = {static_cast<int>(cams.size(0)), image.rows, image.cols};
-  cv::Mat result(3, sizes, CV_32F);
-  std::memcpy(result.data, cams.data_ptr<float>(), cams.numel() * sizeof(float));
   if (scores) {
     const torch::Tensor s = torch::sigmoid(out.logits.squeeze(0)).to(torch::kCPU).contiguous();
     scores->assign(s.data_ptr<float>(), s.data_ptr<float>() + s.numel());
   }
-  return result;
+  return PlanarFromTensor(net::UpsampleBilinear(out.cams, image.rows, image.cols).squeeze(0));
+}
+
+cv::Mat AugmentedCams(net::ClassifierNet& net, const cv::Mat& image,
+                      const std::vector<double>& scales, bool flip) {
+  MOSLAM_CHECK(!scales.empty());
+  torch::NoGradGuard no_grad;
+  const torch::Device device = net->parameters().front().device();
+  torch::Tensor sum;
+  int views = 0;
+  for (double scale : scales) {
+    cv::Mat scaled = image;
+    if (scale != 1.0) {
+      const cv::Size size(std::max(net::kMinInputSide, static_cast<int>(image.cols * scale + 0.5)),
+                          std::max(net::kMinInputSide, static_cast<int>(image.rows * scale + 0.5)));
+      cv::resize(image, scaled, size, 0, 0, scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+    }
+    const torch::Tensor input = ToInputTensor(scaled).unsqueeze(0).to(device);
+    for (int mirrored = 0; mirrored <= (flip ? 1 : 0); ++mirrored) {
+      torch::Tensor cams = net->forward(mirrored ? input.flip({3}) : input).cams;
+      if (mirrored) cams = cams.flip({3});
+      // ReLU before the mean: a view's negative evidence should not cancel another's positive
+      // response (every CAM is ReLU'd before its seeds are taken anyway).
+      const torch::Tensor up = torch::relu(net::UpsampleBilinear(cams, image.rows, image.cols));
+      sum = views == 0 ? up : sum + up;
+      ++views;
+    }
+  }
+  return PlanarFromTensor((sum / views).squeeze(0));
 }
 
 cv::Mat SideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::string>& captions) {

@@ -259,13 +259,14 @@ class CueWriter {
         {"seeded_fraction", stats_.seeded / std::max(1.0, stats_.pixels)},
         {"label_grid", {options_.label_grid_cols, options_.label_grid_rows}},
         {"cell_max", options_.cell_max},
-        {"no_background_in_movable_cells", options_.no_background_in_movable_cells}};
+        {"no_background_in_movable_cells", options_.no_background_in_movable_cells},
+        {"scales", options_.scales},
+        {"flip", options_.flip}};
     if (!options_.segmenter_model.empty()) {
       report["self_training"] = {{"confidence", options_.confidence},
                                  {"fallback_cues", options_.fallback_cues},
-                                 {"depth_folder", options_.depth_folder},
-                                 {"scales", options_.scales},
-                                 {"flip", options_.flip}};
+                                 {"fallback_per_class", options_.fallback_per_class},
+                                 {"depth_folder", options_.depth_folder}};
     }
     for (size_t c = 0; c < seg_classes_.size(); ++c) {
       report["class_fraction"][seg_classes_[c]] = class_pixels_[c] / std::max(1.0, stats_.pixels);
@@ -317,17 +318,6 @@ ImageList TrainingList(const CueGenerationOptions& options) {
   return list;
 }
 
-// True when a labelled class (other than the background) has fewer than `min_fraction` of the
-// cue's pixels.
-bool MissesALabelledClass(const cv::Mat& cue, const std::vector<int>& classes, int background,
-                          float min_fraction) {
-  for (int c : classes) {
-    if (c == background) continue;
-    if (cv::countNonZero(cue == c) < min_fraction * cue.total()) return true;
-  }
-  return false;
-}
-
 // Cue `index` of `folder` as stored (at the image's original size, so CueWriter::Write keeps it
 // as it is), or all kUnknown of `size` without a folder.
 cv::Mat FallbackCue(const std::string& folder, size_t index, cv::Size size) {
@@ -358,15 +348,12 @@ cv::Mat DepthOf(const ImageListEntry& entry, const CueGenerationOptions& options
 
 // The second round (CueGenerationOptions::segmenter_model): cues from a trained segmenter.
 void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
-  if (options.scales.empty()) throw InputError("cues: scales must not be empty");
-  for (double scale : options.scales) {
-    if (!(scale >= 0.25 && scale <= 4.0)) {
-      throw InputError(fmt::format("cues: scales must be in [0.25, 4], got {}", scale));
-    }
-  }
   if (!options.depth_folder.empty() && !(options.depth_factor > 0.0)) {
     throw InputError(fmt::format("cues: depth_factor must be > 0 (raw units per metre), got {}",
                                  options.depth_factor));
+  }
+  if (options.fallback_per_class && options.fallback_cues.empty()) {
+    throw InputError("cues: fallback_per_class (--fallback-per-class) needs fallback cues");
   }
   if (!(options.min_class_pixels >= 0.0f && options.min_class_pixels < 1.0f)) {
     throw InputError(
@@ -420,9 +407,15 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
       ClearLabelInCells(cue, MovableCells(list, sample.cell_classes), options.label_grid_rows,
                         options.label_grid_cols, background);
     }
-    if (MissesALabelledClass(cue, sample.classes, background, options.min_class_pixels)) {
+    const std::vector<int> missed_classes =
+        MissedClasses(cue, sample.classes, background, options.min_class_pixels);
+    if (!missed_classes.empty()) {
       ++missed;
-      cue = FallbackCue(options.fallback_cues, i, cue.size());
+      if (options.fallback_per_class) {
+        FillClassesFrom(FallbackCue(options.fallback_cues, i, cue.size()), missed_classes, cue);
+      } else {
+        cue = FallbackCue(options.fallback_cues, i, cue.size());
+      }
     }
     writer.Write(i, cue);
     if (static_cast<int>(i) < options.preview_images) {
@@ -439,7 +432,10 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
   progress.Finish();
   spdlog::info("cues: the segmenter missed a labelled class in {} of {} images ({})", missed,
                list.entries.size(),
-               options.fallback_cues.empty() ? "left without cues" : "first-round cues used");
+               options.fallback_cues.empty() ? "left without cues"
+               : options.fallback_per_class
+                   ? "the missed classes' first-round seeds put into the segmenter's cue"
+                   : "first-round cues used");
   writer.Finish({options.segmenter_model});
 }
 
@@ -448,6 +444,12 @@ void GenerateCuesFromSegmenter(const CueGenerationOptions& options) {
 void GenerateCues(const CueGenerationOptions& options) {
   options.data.Check();
   options.cues.Check();
+  if (options.scales.empty()) throw InputError("cues: scales must not be empty");
+  for (double scale : options.scales) {
+    if (!(scale >= 0.25 && scale <= 4.0)) {
+      throw InputError(fmt::format("cues: scales must be in [0.25, 4], got {}", scale));
+    }
+  }
   at::set_num_threads(options.threads);
   if ((options.cell_max || options.no_background_in_movable_cells) &&
       options.label_grid_cols == 0) {
@@ -463,9 +465,6 @@ void GenerateCues(const CueGenerationOptions& options) {
   }
   if (!options.depth_folder.empty()) {
     throw InputError("cues: --depth-folder is for self-training cues (--segmenter) only");
-  }
-  if (options.flip || options.scales != std::vector<double>{1.0}) {
-    throw InputError("cues: --scales and --flip are for self-training cues (--segmenter) only");
   }
   const ImageList list = TrainingList(options);
   const std::vector<std::string> classifier_classes =
@@ -503,7 +502,7 @@ void GenerateCues(const CueGenerationOptions& options) {
         cv::cvtColor(sample.image, grey, cv::COLOR_BGR2GRAY);
         cv::cvtColor(grey, input, cv::COLOR_GRAY2BGR);
       }
-      cv::Mat cams = internal::ComputeCams(model.net, input, nullptr);
+      cv::Mat cams = internal::AugmentedCams(model.net, input, options.scales, options.flip);
       if (options.label_grid_cols > 0) {
         SuppressAbsentInCells(cams, sample.cell_classes, options.label_grid_rows,
                               options.label_grid_cols, options.cell_max);

@@ -163,6 +163,29 @@ void ClearLabelInCells(cv::Mat& seeds, const std::vector<bool>& cells, int rows,
   }
 }
 
+std::vector<int> MissedClasses(const cv::Mat& cue, const std::vector<int>& classes, int background,
+                               float min_fraction) {
+  if (cue.type() != CV_8UC1) ThrowInput("MissedClasses: cue must be CV_8UC1");
+  std::vector<int> missed;
+  for (int c : classes) {
+    if (c == background) continue;
+    if (cv::countNonZero(cue == c) < min_fraction * cue.total()) missed.push_back(c);
+  }
+  return missed;
+}
+
+void FillClassesFrom(const cv::Mat& source, const std::vector<int>& classes, cv::Mat& cue) {
+  if (cue.type() != CV_8UC1 || source.type() != CV_8UC1) {
+    ThrowInput("FillClassesFrom: cue and source must be CV_8UC1");
+  }
+  if (classes.empty() || cue.empty()) return;
+  cv::Mat resized = source;
+  if (source.size() != cue.size()) {
+    cv::resize(source, resized, cue.size(), 0, 0, cv::INTER_NEAREST);
+  }
+  for (int c : classes) cue.setTo(c, resized == c);
+}
+
 cv::Mat RefineWithSuperpixels(const cv::Mat& seeds, const cv::Mat& image,
                               const CueOptions& options) {
   options.Check();

@@ -64,6 +64,16 @@ void SuppressAbsentInCells(cv::Mat& cams, const std::vector<std::vector<int>>& c
 void ClearLabelInCells(cv::Mat& seeds, const std::vector<bool>& cells, int rows, int cols,
                        int label);
 
+// The labelled classes (`classes`, the background excepted) that `cue` seeds on fewer than
+// `min_fraction` of its pixels: the classes a self-training cue missed.
+std::vector<int> MissedClasses(const cv::Mat& cue, const std::vector<int>& classes, int background,
+                               float min_fraction);
+
+// Pixels where `source` (CV_8UC1 cue of any size, resized to the cue's by nearest neighbour) holds
+// one of `classes` take that label in `cue`, whatever `cue` said there: a missed class's
+// first-round seeds put back into a self-training cue, the rest of which is kept.
+void FillClassesFrom(const cv::Mat& source, const std::vector<int>& classes, cv::Mat& cue);
+
 // SLIC superpixel refinement of `seeds` on `image` (CV_8UC3 or CV_8UC1 of the seeds' size).
 cv::Mat RefineWithSuperpixels(const cv::Mat& seeds, const cv::Mat& image,
                               const CueOptions& options);

@@ -401,4 +401,32 @@ TEST(CuesTest, ClearLabelInCellsUnseedsOnlyThatLabelInTheFlaggedCells) {
   EXPECT_THROW(ClearLabelInCells(seeds, {true}, 2, 2, 2), InputError);
 }
 
+TEST(CuesTest, MissedClassesAreTheLabelledOnesSeededBelowTheFraction) {
+  cv::Mat cue(10, 10, CV_8UC1, cv::Scalar(kUnknown));
+  cue(cv::Rect(0, 0, 10, 5)).setTo(3);  // background, 50 %
+  cue(cv::Rect(0, 5, 2, 1)).setTo(0);   // class 0 on 2 %
+  cue(cv::Rect(0, 6, 1, 1)).setTo(1);   // class 1 on 1 %
+  // Class 2 is labelled but never seeded; the background never counts as missed.
+  EXPECT_EQ(MissedClasses(cue, {0, 1, 2, 3}, 3, 0.015f), (std::vector<int>{1, 2}));
+  EXPECT_EQ(MissedClasses(cue, {0, 1, 3}, 3, 0.01f), std::vector<int>{});
+  EXPECT_EQ(MissedClasses(cue, {0, 1, 3}, 3, 0.03f), (std::vector<int>{0, 1}));
+}
+
+TEST(CuesTest, FillClassesFromPutsOnlyTheGivenClassesOverTheCue) {
+  cv::Mat cue(4, 4, CV_8UC1, cv::Scalar(3));
+  cue(cv::Rect(0, 0, 4, 1)).setTo(kUnknown);
+  // The source at twice the cue's size: resized by nearest neighbour.
+  cv::Mat source(8, 8, CV_8UC1, cv::Scalar(kUnknown));
+  source(cv::Rect(0, 0, 4, 4)).setTo(1);  // cue's top-left 2x2
+  source(cv::Rect(4, 4, 4, 4)).setTo(2);  // cue's bottom-right 2x2, not asked for
+  FillClassesFrom(source, {1}, cue);
+  EXPECT_EQ(cue.at<uint8_t>(0, 0), 1);  // over kUnknown
+  EXPECT_EQ(cue.at<uint8_t>(1, 1), 1);  // over the background
+  EXPECT_EQ(cue.at<uint8_t>(0, 2), kUnknown);
+  EXPECT_EQ(cue.at<uint8_t>(3, 3), 3);  // class 2 was not asked for
+  EXPECT_EQ(cv::countNonZero(cue == 1), 4);
+  cv::Mat wrong(4, 4, CV_32F);
+  EXPECT_THROW(FillClassesFrom(wrong, {1}, cue), InputError);
+}
+
 }  // namespace moslam::weak

@@ -106,6 +106,13 @@ struct CueGenerationOptions {
   // cue at all (every pixel kUnknown).
   std::string fallback_cues;
   float min_class_pixels = 0.001f;
+  // Take from `fallback_cues` only the seeds of the classes the segmenter missed, written over its
+  // cue (FillClassesFrom), rather than the whole fallback cue. A labelled object often covers
+  // less than min_class_pixels of the image (CamVid labels a class present from 0.1 % of the
+  // pixels), and replacing the whole cue then throws away every other class the segmenter found.
+  // Best with no_background_in_movable_cells, so that the segmenter's background does not cover
+  // the object it missed. Requires fallback_cues.
+  bool fallback_per_class = false;
   // Self-training on RGB-D data: a folder of 16-bit depth PNGs named as the images (a `moslam
   // synth --train` folder's depth/), `depth_factor` raw units per metre. When set, the CRF gets
   // its depth kernel (crf.depth_* options; the paper's "c,d" with the colour kernel on): people
@@ -113,11 +120,12 @@ struct CueGenerationOptions {
   // sensor data that comes with every image, not a label.
   std::string depth_folder;
   double depth_factor = 5000.0;
-  // Test-time augmentation of the segmenter's softmax (self-training only): the mean over the
-  // image resized by each of `scales` (relative to the network's input size) and, with `flip`,
-  // over their mirror images too, as WSSS methods do when they make pseudo-labels (e.g. Ahn and
-  // Kwak, CVPR 2018): a larger scale finds small objects and outlines that the stride-16 map
-  // blurs, and averaging cancels a part of the errors of any one view.
+  // Test-time augmentation, in both rounds: the segmenter's softmax (self-training), or each
+  // classifier's ReLU'd CAMs (internal::AugmentedCams), is the mean over the image resized by
+  // each of `scales` (relative to the network's input size) and, with `flip`, over their mirror
+  // images too, as WSSS methods do when they make pseudo-labels (e.g. Ahn and Kwak, CVPR 2018):
+  // a larger scale finds small objects and outlines that the stride-16 map blurs, and averaging
+  // cancels a part of the errors of any one view.
   std::vector<double> scales = {1.0};
   bool flip = false;
 };

@@ -95,6 +95,13 @@ namespace moslam::weak::internal {
 // receives the sigmoid class scores when not null.
 cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<float>* scores);
 
+// Multi-scale CAMs, as WSSS methods take them (e.g. Ahn and Kwak, CVPR 2018): the mean of the
+// ReLU'd CAMs of `image` resized by each of `scales` and, with `flip`, of their mirror images,
+// each upsampled to the image's size ({C, H, W} CV_32F). A larger scale resolves objects that
+// are a few pixels of the stride-16 map wide. scales {1} without flip equals ReLU(ComputeCams).
+cv::Mat AugmentedCams(net::ClassifierNet& net, const cv::Mat& image,
+                      const std::vector<double>& scales, bool flip);
+
 // The segmenter's softmax on `image` (CV_8UC3 BGR at the network's input size), C x H x W at
 // the image's size: the mean over the image resized by each of `scales` and, with `flip`, their
 // mirror images (CueGenerationOptions::scales).

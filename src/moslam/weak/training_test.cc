@@ -229,6 +229,10 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   // Where a labelled class is seeded on less than min_class_pixels of the image (here 99 %: every
   // image with two labels, and those with one unless the segmenter floods it), the image takes the
   // fallback cue, or none without one; other images keep the segmenter's cue.
+  CueGenerationOptions raw = second;  // the segmenter's cue of every image, none replaced
+  raw.out = dir_.path() + "/cues2raw";
+  raw.min_class_pixels = 0.0f;
+  GenerateCues(raw);
   CueGenerationOptions strict = second;
   strict.out = dir_.path() + "/cues3";
   strict.min_class_pixels = 0.99f;
@@ -237,22 +241,38 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   fallback.out = dir_.path() + "/cues4";
   fallback.fallback_cues = cues.out;
   GenerateCues(fallback);
+  // Per class: only the missed classes' first-round seeds, over the segmenter's own cue.
+  CueGenerationOptions per_class = fallback;
+  per_class.out = dir_.path() + "/cues4c";
+  per_class.fallback_per_class = true;
+  GenerateCues(per_class);
   const auto cue = [](const std::string& folder, size_t i) {
     return cv::imread(fmt::format("{}/cues/{:06d}.png", folder, i), cv::IMREAD_UNCHANGED);
   };
-  int missed = 0;
+  int missed = 0, changed_by_fill = 0;
   for (size_t i = 0; i < toys_.size(); ++i) {
-    const cv::Mat own = cue(second.out, i);
+    const cv::Mat own = cue(raw.out, i);
+    const cv::Mat first_round = cue(cues.out, i);
     bool misses = false;
+    cv::Mat filled = own.clone();
     for (const auto& [present, label] : {std::pair{toys_[i].square, 0}, {toys_[i].disc, 1}}) {
-      misses |= present && cv::countNonZero(own == label) < 0.99 * own.total();
+      if (present && cv::countNonZero(own == label) < 0.99 * own.total()) {
+        misses = true;
+        filled.setTo(label, first_round == label);
+      }
     }
     missed += misses;
     const cv::Mat expected = misses ? cv::Mat(own.size(), CV_8UC1, cv::Scalar(kUnknown)) : own;
     EXPECT_EQ(cv::countNonZero(cue(strict.out, i) != expected), 0) << i;
-    EXPECT_EQ(cv::countNonZero(cue(fallback.out, i) != (misses ? cue(cues.out, i) : own)), 0) << i;
+    EXPECT_EQ(cv::countNonZero(cue(fallback.out, i) != (misses ? first_round : own)), 0) << i;
+    EXPECT_EQ(cv::countNonZero(cue(per_class.out, i) != filled), 0) << i;
+    if (misses) changed_by_fill += cv::countNonZero(filled != own);
   }
-  EXPECT_GE(missed, 8);  // at least the images with both objects
+  EXPECT_GE(missed, 8);           // at least the images with both objects
+  EXPECT_GT(changed_by_fill, 0);  // the fill did put first-round seeds in
+  per_class.fallback_cues.clear();
+  EXPECT_THAT(testing::ErrorOf([&] { GenerateCues(per_class); }),
+              ::testing::HasSubstr("--fallback-per-class"));
   // RGB-D data: the CRF adds its depth kernel (objects 1 m in front of a background at 3 m, in
   // 16-bit PNGs of 1/5000 m named as the images).
   fs::create_directories(data_ + "/depth");
@@ -283,17 +303,21 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   augmented.flip = true;
   GenerateCues(augmented);
   const nlohmann::json report6 = nlohmann::json::parse(std::ifstream(augmented.out + "/cues.json"));
-  EXPECT_EQ(report6["self_training"]["scales"], nlohmann::json({1.0, 1.5}));
-  EXPECT_EQ(report6["self_training"]["flip"], true);
+  EXPECT_EQ(report6["scales"], nlohmann::json({1.0, 1.5}));
+  EXPECT_EQ(report6["flip"], true);
   EXPECT_GT(report6["class_fraction"]["square"].get<double>(), 0.0);
   augmented.scales = {0.1};
   EXPECT_THAT(testing::ErrorOf([&] { GenerateCues(augmented); }), ::testing::HasSubstr("scales"));
-  // Depth and augmentation are for self-training cues; classifier models and a segmenter
-  // together are an error.
+  // Classifier cues take the same augmentation (multi-scale CAMs), recorded alike.
   augmented.segmenter_model.clear();
-  augmented.scales = {1.0};
+  augmented.scales = {1.0, 1.5};
   augmented.colour_model = classifier.model;
-  EXPECT_THAT(testing::ErrorOf([&] { GenerateCues(augmented); }), ::testing::HasSubstr("--flip"));
+  augmented.out = dir_.path() + "/cues7";
+  GenerateCues(augmented);
+  const nlohmann::json report7 = nlohmann::json::parse(std::ifstream(augmented.out + "/cues.json"));
+  EXPECT_EQ(report7["scales"], nlohmann::json({1.0, 1.5}));
+  EXPECT_GT(report7["class_fraction"]["square"].get<double>(), 0.0);
+  // Depth is for self-training cues; classifier models and a segmenter together are an error.
   with_depth.segmenter_model.clear();
   with_depth.colour_model = classifier.model;
   EXPECT_THROW(GenerateCues(with_depth), InputError);
@@ -338,6 +362,44 @@ TEST(AugmentedProbabilities, OneViewIsTheSoftmaxAndFlipIsMirrorSymmetric) {
   EXPECT_TRUE(torch::allclose(of_mirror, both.flip({2}), 1e-4, 1e-5));
   EXPECT_TRUE(torch::allclose(both.sum(0), torch::ones({48, 64}), 1e-4, 1e-5));
   EXPECT_FALSE(torch::allclose(both, one, 1e-3, 1e-3));  // the other views do count
+}
+
+// Multi-scale CAMs for classifier cues: one view is the ReLU'd CAM, the flipped mean is
+// mirror-symmetric, and the other views change the maps.
+TEST(AugmentedCams, OneViewIsTheReluCamAndFlipIsMirrorSymmetric) {
+  net::NetConfig config;
+  config.kind = net::NetKind::kClassifier;
+  config.classes = {"square", "disc"};
+  config.backbone.last_block = 6;
+  config.backbone.output_stride = 8;
+  config.input_width = 64;
+  config.input_height = 48;
+  torch::manual_seed(4);
+  net::ClassifierNet net(config);
+  net->eval();
+  cv::Mat image(48, 64, CV_8UC3);
+  cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(256));
+  const cv::Mat one = internal::AugmentedCams(net, image, {1.0}, false);
+  ASSERT_EQ(one.dims, 3);
+  EXPECT_EQ(one.size[0], 2);
+  EXPECT_EQ(one.size[1], 48);
+  EXPECT_EQ(one.size[2], 64);
+  const cv::Mat plain = internal::ComputeCams(net, image, nullptr);
+  const cv::Mat relu = cv::max(plain, 0.0f);
+  EXPECT_LT(cv::norm(one, relu, cv::NORM_INF), 1e-5);
+  EXPECT_GT(cv::countNonZero(plain.reshape(1, 1) < 0.0f), 0);  // the ReLU did something
+
+  const std::vector<double> scales = {1.0, 1.5};
+  const cv::Mat both = internal::AugmentedCams(net, image, scales, true);
+  cv::Mat mirrored;
+  cv::flip(image, mirrored, 1);
+  const cv::Mat of_mirror = internal::AugmentedCams(net, mirrored, scales, true);
+  for (int c = 0; c < 2; ++c) {
+    cv::Mat flipped_back;
+    cv::flip(semantic::LabelPlane(of_mirror, c), flipped_back, 1);
+    EXPECT_LT(cv::norm(flipped_back, semantic::LabelPlane(both, c), cv::NORM_INF), 1e-4) << c;
+  }
+  EXPECT_GT(cv::norm(both, one, cv::NORM_INF), 1e-3);  // the other views do count
 }
 
 // A classifier trained at stride 8 (finer activation maps) starts a stride-16 segmenter: the
