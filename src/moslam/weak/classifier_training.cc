@@ -48,30 +48,14 @@ cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<f
 
 cv::Mat AugmentedCams(net::ClassifierNet& net, const cv::Mat& image,
                       const std::vector<double>& scales, bool flip) {
-  MOSLAM_CHECK(!scales.empty());
-  torch::NoGradGuard no_grad;
-  const torch::Device device = net->parameters().front().device();
-  torch::Tensor sum;
-  int views = 0;
-  for (double scale : scales) {
-    cv::Mat scaled = image;
-    if (scale != 1.0) {
-      const cv::Size size(std::max(net::kMinInputSide, static_cast<int>(image.cols * scale + 0.5)),
-                          std::max(net::kMinInputSide, static_cast<int>(image.rows * scale + 0.5)));
-      cv::resize(image, scaled, size, 0, 0, scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
-    }
-    const torch::Tensor input = ToInputTensor(scaled).unsqueeze(0).to(device);
-    for (int mirrored = 0; mirrored <= (flip ? 1 : 0); ++mirrored) {
-      torch::Tensor cams = net->forward(mirrored ? input.flip({3}) : input).cams;
-      if (mirrored) cams = cams.flip({3});
-      // ReLU before the mean: a view's negative evidence should not cancel another's positive
-      // response (every CAM is ReLU'd before its seeds are taken anyway).
-      const torch::Tensor up = torch::relu(net::UpsampleBilinear(cams, image.rows, image.cols));
-      sum = views == 0 ? up : sum + up;
-      ++views;
-    }
-  }
-  return PlanarFromTensor((sum / views).squeeze(0));
+  // ReLU before the mean: a view's negative evidence should not cancel another's positive
+  // response (every CAM is ReLU'd before its seeds are taken anyway).
+  return PlanarFromTensor(
+      MeanOverViews(
+          image, scales, flip, net->parameters().front().device(),
+          [&net](const torch::Tensor& input) { return net->forward(input).cams; },
+          [](const torch::Tensor& cams) { return torch::relu(cams); })
+          .squeeze(0));
 }
 
 cv::Mat SideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::string>& captions) {

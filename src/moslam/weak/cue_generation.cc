@@ -28,26 +28,13 @@ namespace internal {
 
 torch::Tensor AugmentedProbabilities(net::SegmenterNet& net, const cv::Mat& image,
                                      const std::vector<double>& scales, bool flip) {
-  torch::Tensor sum;
-  int views = 0;
-  for (double scale : scales) {
-    cv::Mat scaled = image;
-    if (scale != 1.0) {
-      const cv::Size size(std::max(32, static_cast<int>(std::lround(image.cols * scale))),
-                          std::max(32, static_cast<int>(std::lround(image.rows * scale))));
-      cv::resize(image, scaled, size, 0, 0, scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
-    }
-    const torch::Tensor input = ToInputTensor(scaled).unsqueeze(0);
-    for (int mirrored = 0; mirrored <= (flip ? 1 : 0); ++mirrored) {
-      torch::Tensor logits = net->forward(mirrored ? input.flip({3}) : input).logits;
-      if (mirrored) logits = logits.flip({3});
-      const torch::Tensor p =
-          torch::softmax(net::UpsampleBilinear(logits, image.rows, image.cols), 1);
-      sum = views == 0 ? p : sum + p;
-      ++views;
-    }
-  }
-  return (sum / views).squeeze(0).to(torch::kFloat32).contiguous();
+  return MeanOverViews(
+             image, scales, flip, net->parameters().front().device(),
+             [&net](const torch::Tensor& input) { return net->forward(input).logits; },
+             [](const torch::Tensor& logits) { return torch::softmax(logits, 1); })
+      .squeeze(0)
+      .to(torch::kCPU, torch::kFloat32)
+      .contiguous();
 }
 
 }  // namespace internal

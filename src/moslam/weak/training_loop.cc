@@ -324,4 +324,32 @@ TrainSummary RunTrainingLoop(const CommonTrainOptions& options, const LoopSpec& 
   return summary;
 }
 
+torch::Tensor MeanOverViews(const cv::Mat& image, const std::vector<double>& scales, bool flip,
+                            torch::Device device,
+                            const std::function<torch::Tensor(const torch::Tensor&)>& map,
+                            const std::function<torch::Tensor(const torch::Tensor&)>& activation) {
+  MOSLAM_CHECK(!scales.empty());
+  torch::NoGradGuard no_grad;
+  torch::Tensor sum;
+  int views = 0;
+  for (double scale : scales) {
+    cv::Mat scaled = image;
+    if (scale != 1.0) {
+      const cv::Size size(
+          std::max(net::kMinInputSide, static_cast<int>(std::lround(image.cols * scale))),
+          std::max(net::kMinInputSide, static_cast<int>(std::lround(image.rows * scale))));
+      cv::resize(image, scaled, size, 0, 0, scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+    }
+    const torch::Tensor input = ToInputTensor(scaled).unsqueeze(0).to(device);
+    for (int mirrored = 0; mirrored <= (flip ? 1 : 0); ++mirrored) {
+      torch::Tensor out = map(mirrored ? input.flip({3}) : input);
+      if (mirrored) out = out.flip({3});
+      const torch::Tensor view = activation(net::UpsampleBilinear(out, image.rows, image.cols));
+      sum = views == 0 ? view : sum + view;
+      ++views;
+    }
+  }
+  return sum / views;
+}
+
 }  // namespace moslam::weak::internal

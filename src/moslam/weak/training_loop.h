@@ -95,6 +95,15 @@ namespace moslam::weak::internal {
 // receives the sigmoid class scores when not null.
 cv::Mat ComputeCams(net::ClassifierNet& net, const cv::Mat& image, std::vector<float>* scores);
 
+// The mean over views of `image` (CV_8UC3 BGR): the image resized by each of `scales` and, with
+// `flip`, its mirror images. `map` takes a 1 x 3 x h x w input tensor of a view (on `device`) and
+// returns a 1 x C x h' x w' map; each map is mirrored back, upsampled bilinearly to the image's
+// size and passed through `activation` before the mean, which is 1 x C x H x W.
+torch::Tensor MeanOverViews(const cv::Mat& image, const std::vector<double>& scales, bool flip,
+                            torch::Device device,
+                            const std::function<torch::Tensor(const torch::Tensor&)>& map,
+                            const std::function<torch::Tensor(const torch::Tensor&)>& activation);
+
 // Multi-scale CAMs, as WSSS methods take them (e.g. Ahn and Kwak, CVPR 2018): the mean of the
 // ReLU'd CAMs of `image` resized by each of `scales` and, with `flip`, of their mirror images,
 // each upsampled to the image's size ({C, H, W} CV_32F). A larger scale resolves objects that
