@@ -193,7 +193,16 @@ void AddTrainCommand(CLI::App& app) {
   s->add_flag_callback(
       "--unbalanced-seeds", [] { segmenter.seed_balance = 0.0; },
       "seeding loss as the plain mean over seeds (--seed-balance 0)");
-  s->callback([] { weak::TrainSegmenter(segmenter); });
+  static std::string segmenter_crf_config;
+  s->add_option("--crf-config", segmenter_crf_config,
+                "YAML file of crf.* options for the constrain-to-boundary loss's CRF, sxy in "
+                "input pixels (default: the CRF's defaults)");
+  s->callback([] {
+    if (!segmenter_crf_config.empty()) {
+      segmenter.crf = semantic::LoadDenseCrfOptions(segmenter_crf_config);
+    }
+    weak::TrainSegmenter(segmenter);
+  });
 }
 
 }  // namespace moslam::app

@@ -231,7 +231,10 @@ TrainSummary TrainSegmenter(const SegmenterTrainOptions& options_in) {
                          {"class_weight", options.class_weight},
                          {"grey_probability", options.grey_probability},
                          {"loss_stride", options.loss_stride},
-                         {"seed_balance", options.seed_balance}});
+                         {"seed_balance", options.seed_balance},
+                         {"crf_appearance_weight", options.crf.appearance_weight},
+                         {"crf_appearance_sxy", options.crf.appearance_sxy},
+                         {"crf_smoothness_weight", options.crf.smoothness_weight}});
   return summary;
 }
 

@@ -225,7 +225,12 @@ TEST_F(TrainingTest, CuesAndSegmenterRunEndToEnd) {
   seg.cues = second.out;
   seg.loss_stride = 4;
   seg.seed_balance = 0.0;
+  seg.crf.appearance_weight = 2.0f;  // the constrain loss's CRF, as `--crf-config` sets it
+  seg.crf.appearance_sxy = 10.0f;
   EXPECT_TRUE(fs::exists(TrainSegmenter(seg).model));
+  const nlohmann::json seg2 = nlohmann::json::parse(std::ifstream(seg.common.out + "/report.json"));
+  EXPECT_FLOAT_EQ(seg2["crf_appearance_weight"].get<float>(), 2.0f) << seg2.dump();
+  EXPECT_FLOAT_EQ(seg2["crf_appearance_sxy"].get<float>(), 10.0f);
   // Where a labelled class is seeded on less than min_class_pixels of the image (here 99 %: every
   // image with two labels, and those with one unless the segmenter floods it), the image takes the
   // fallback cue, or none without one; other images keep the segmenter's cue.
