@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,7 @@ struct SegEvalArgs {
   bool grey = false;
   std::string crf = "none";
   float suppress_below = 0.0f;
+  std::optional<float> movable_bias;  // the card's refine.movable_bias when not given
   std::vector<int> label_movable = {8, 9, 10};
   std::vector<int> label_ignore = {11};
   // Class names of the label ids, in id order (CamVid's when empty).
@@ -85,6 +87,7 @@ std::unique_ptr<semantic::MaskProvider> MakeProvider(const semantic::ModelCard& 
   semantic::RefineOptions refine = card.refine;
   refine.working_side = 0;  // the probabilities at the image's size: labels are full resolution
   refine.suppress_below = args.suppress_below;
+  if (args.movable_bias) refine.movable_bias = *args.movable_bias;
   refine.crf = semantic::ParseCrfMode(args.crf).value();
   refine.crf_binary = false;  // every class, so that the CRF changes the labels, not only the mask
   refine.dilate_px = 0;
@@ -250,6 +253,7 @@ void Run(const SegEvalArgs& args) {
   json["grey"] = args.grey;
   json["crf"] = args.crf;
   json["suppress_below"] = args.suppress_below;
+  json["movable_bias"] = args.movable_bias.value_or(card.refine.movable_bias);
   json["label_movable"] = args.label_movable;
   json["ms_per_image"] = {{"mean", ms.mean},
                           {"median", ms.median},
@@ -306,6 +310,12 @@ void AddSegEvalCommand(CLI::App& app) {
                   "probability 0 (the background class never); 0 = off")
       ->check(CLI::Range(0.0, 0.999))
       ->capture_default_str();
+  cmd->add_option_function<float>(
+         "--movable-bias", [args](float bias) { args->movable_bias = bias; },
+         "Added to the movable classes' log-probabilities before the decision and the CRF "
+         "(refine.movable_bias; default: the card's, 0 for a bare .mnet); choose it on training "
+         "images")
+      ->check(CLI::Range(-10.0, 10.0));
   cmd->add_option("--label-movable", args->label_movable, "Label ids that are movable")
       ->delimiter(',')
       ->capture_default_str();

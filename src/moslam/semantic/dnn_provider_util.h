@@ -35,6 +35,7 @@ inline std::string RefineText(const RefineOptions& refine) {
   std::string text =
       fmt::format(", crf {}, working side {} px", ToString(refine.crf), refine.working_side);
   if (refine.suppress_below > 0.0f) text += fmt::format(", suppress < {}", refine.suppress_below);
+  if (refine.movable_bias != 0.0f) text += fmt::format(", movable bias {}", refine.movable_bias);
   if (refine.dilate_px > 0) text += fmt::format(", dilated {} px", refine.dilate_px);
   return text;
 }

@@ -66,6 +66,9 @@ void RefineOptions::Check() const {
   if (!(suppress_below >= 0.0f && suppress_below < 1.0f)) {
     ThrowInput("refine.suppress_below: must be in [0, 1), got {}", suppress_below);
   }
+  if (!(std::abs(movable_bias) <= 10.0f)) {
+    ThrowInput("refine.movable_bias: must be in [-10, 10] (nats), got {}", movable_bias);
+  }
   if (dilate_px < 0) ThrowInput("refine.dilate_px: must be >= 0, got {}", dilate_px);
   crf_options.Check();
 }
@@ -74,6 +77,7 @@ void ReadRefineOptions(YamlFile& file, const std::string& prefix, RefineOptions*
   file.Read(prefix + "working_side", &options->working_side);
   file.Read(prefix + "suppress_below", &options->suppress_below);
   file.Read(prefix + "crf_binary", &options->crf_binary);
+  file.Read(prefix + "movable_bias", &options->movable_bias);
   file.Read(prefix + "dilate_px", &options->dilate_px);
   ReadDenseCrfOptions(file, "crf.", &options->crf_options);
 }
@@ -211,6 +215,7 @@ RefineResult MaskRefiner::Refine(cv::Mat probabilities, const cv::Mat& image,
       }
     }
   }
+  if (options_.movable_bias != 0.0f) ShiftMovablePrior(&probabilities);
   result.labels = ArgMaxPlanar(probabilities);
   const cv::Mat movable_work =
       MovableAtWorkingSize(&probabilities, result.labels, image, depth_m, &result.crf_ms);
@@ -232,6 +237,21 @@ RefineResult MaskRefiner::Refine(cv::Mat probabilities, const cv::Mat& image,
   result.probabilities = std::move(probabilities);
   result.mask = std::move(mask);
   return result;
+}
+
+void MaskRefiner::ShiftMovablePrior(cv::Mat* probabilities) const {
+  const float factor = std::exp(options_.movable_bias);
+  const cv::Size size = PlanarSize(*probabilities);
+  cv::Mat sum(size, CV_32F, cv::Scalar(0));
+  for (int l = 0; l < static_cast<int>(movable_.size()); ++l) {
+    cv::Mat plane = LabelPlane(*probabilities, l);
+    if (movable_[l]) plane *= factor;
+    sum += plane;
+  }
+  for (int l = 0; l < static_cast<int>(movable_.size()); ++l) {
+    cv::Mat plane = LabelPlane(*probabilities, l);
+    cv::divide(plane, cv::max(sum, 1e-12f), plane);
+  }
 }
 
 cv::Mat MaskRefiner::MovableAtWorkingSize(cv::Mat* probabilities, const cv::Mat& labels,

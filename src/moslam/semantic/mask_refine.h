@@ -7,9 +7,10 @@
 //      `suppress_below` is taken to be absent and its probability moved to the others
 //      (renormalized); weak, scattered responses of a class that is not in the picture are the
 //      most common false positives of a segmentation network on another domain;
-//   3. optionally the fully connected CRF (dense_crf.h) with the colour kernel (c), the depth
+//   3. optionally a prior shift of the movable classes (`movable_bias`, below);
+//   4. optionally the fully connected CRF (dense_crf.h) with the colour kernel (c), the depth
 //      kernel (d) or both (cd), the paper's (Sun et al. 2019) three refinements;
-//   4. the movable pixels (argmax is a movable class) are upsampled to the image's size
+//   5. the movable pixels (argmax is a movable class) are upsampled to the image's size
 //      (bilinear on the 0/255 mask, thresholded at half, so edges are not blocky) and optionally
 //      dilated.
 #pragma once
@@ -49,6 +50,14 @@ struct RefineOptions {
   // every class: tracking only uses the mask, and the CRF's cost grows with the labels (anchors:
   // 93 ms for 2 labels against 192 ms for 21 at 480x360).
   bool crf_binary = true;
+  // Added to the log-probability of every movable class before the decision and the CRF (the
+  // probabilities are renormalized), in nats; 0 = off, negative = fewer movable pixels. A prior
+  // correction (Saerens, Latinne, Decaestecker 2002, "Adjusting the outputs of a classifier to new
+  // a priori probabilities"): a network trained with a class-balanced loss acts as if the rare
+  // movable classes were as frequent as the background and over-predicts them. On two labels,
+  // movable wins where its probability exceeds 1 / (1 + exp(movable_bias)). Choose it on
+  // training images, never on the images you report.
+  float movable_bias = 0.0f;
   int dilate_px = 0;  // grow the final mask by this many pixels (elliptic), >= 0
   // Its appearance/depth switches are set from `crf`; its spatial sigmas (sxy) are in pixels of
   // the full image and scaled to the working resolution.
@@ -57,8 +66,8 @@ struct RefineOptions {
   void Check() const;
 };
 
-// Reads `prefix`working_side, suppress_below, crf_binary, dilate_px and the CRF's options under
-// "crf." (dense_crf.h); absent keys keep their values.
+// Reads `prefix`working_side, suppress_below, crf_binary, movable_bias, dilate_px and the CRF's
+// options under "crf." (dense_crf.h); absent keys keep their values.
 void ReadRefineOptions(YamlFile& file, const std::string& prefix, RefineOptions* options);
 
 // The working resolution for an image of `image_size` (see RefineOptions::working_side).
@@ -105,6 +114,8 @@ class MaskRefiner {
                       const std::vector<float>& image_scores = {});
 
  private:
+  // Multiplies the movable classes' planes by exp(movable_bias) and renormalizes in place.
+  void ShiftMovablePrior(cv::Mat* probabilities) const;
   // The 0/255 movable mask at the working size; with the CRF on every class, *probabilities
   // becomes its marginals.
   cv::Mat MovableAtWorkingSize(cv::Mat* probabilities, const cv::Mat& labels, const cv::Mat& image,

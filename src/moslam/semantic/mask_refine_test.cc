@@ -1,6 +1,8 @@
 // The post-processing of the mask providers on hand-made probabilities: no network needed.
 #include "moslam/semantic/mask_refine.h"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "moslam/semantic/box_detector.h"
@@ -87,6 +89,40 @@ TEST(MaskRefine, WeakClassesAreSuppressedButNotTheBackground) {
     for (int l = 0; l < 3; ++l) sum += gone.probabilities.at<float>(l, y, 3);
     EXPECT_NEAR(sum, 1.0f, 1e-5f);
   }
+}
+
+TEST(MaskRefine, MovableBiasMovesTheDecisionThreshold) {
+  const cv::Mat image(30, 40, CV_8UC1, cv::Scalar(100));
+  // Person at 0.8 on the left 10 columns, 0.2 elsewhere; no tree.
+  const cv::Mat probs = Probabilities(cv::Size(40, 30), 10, 0.0f);
+  const auto movable_pixels = [&](float bias) {
+    RefineOptions options;
+    options.working_side = 0;
+    options.movable_bias = bias;
+    MaskRefiner refiner(options, {false, true, false}, 0);
+    return cv::countNonZero(refiner.Refine(probs.clone(), image, {}).mask);
+  };
+  // Two labels: movable where p > 1 / (1 + exp(bias)): 0.73 at -1, 0.82 at -1.5, 0.18 at +1.5.
+  EXPECT_EQ(movable_pixels(0.0f), 10 * 30);
+  EXPECT_EQ(movable_pixels(-1.0f), 10 * 30);
+  EXPECT_EQ(movable_pixels(-1.5f), 0);
+  EXPECT_EQ(movable_pixels(1.5f), 40 * 30);
+
+  RefineOptions options;
+  options.working_side = 0;
+  options.movable_bias = -1.0f;
+  MaskRefiner refiner(options, {false, true, false}, 0);
+  const RefineResult r = refiner.Refine(probs.clone(), image, {});
+  // exp(-1) * 0.8 against 0.2, renormalized: 0.5954 person on the left, still summing to 1.
+  const float person = 0.8f * std::exp(-1.0f) / (0.8f * std::exp(-1.0f) + 0.2f);
+  EXPECT_NEAR(r.probabilities.at<float>(1, 5, 3), person, 1e-5f);
+  EXPECT_NEAR(r.probabilities.at<float>(0, 5, 3), 1.0f - person, 1e-5f);
+  EXPECT_EQ(r.labels.at<uint8_t>(5, 3), 1);
+
+  options.movable_bias = std::nanf("");
+  EXPECT_THROW(options.Check(), InputError);
+  options.movable_bias = 11.0f;
+  EXPECT_THROW(options.Check(), InputError);
 }
 
 TEST(MaskRefine, GivenImageScoresDecideTheSuppression) {

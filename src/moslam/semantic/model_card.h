@@ -20,7 +20,8 @@
 //   nms: 0.45                   # detector: non-maximum suppression IoU
 //   box_probability: 0.9        # detector: probability given to a box's class inside the box
 //   threads: 2                  # torch: libtorch's intra-op threads (the CRF has crf.num_threads)
-//   refine: {working_side: 320, suppress_below: 0.0, crf_binary: true, dilate_px: 0}
+//   refine: {working_side: 320, suppress_below: 0.0, crf_binary: true, movable_bias: 0.0,
+//            dilate_px: 0}              # RefineOptions (mask_refine.h)
 //   crf: {...}                  # DenseCrfOptions fields (dense_crf.h)
 //
 // `type: torch` is a segmentation network of the weakly supervised pipeline run by libtorch

@@ -30,6 +30,7 @@ constexpr const char* kCard =
     "refine:\n"
     "  working_side: 100\n"
     "  suppress_below: 0.3\n"
+    "  movable_bias: -0.75\n"
     "crf:\n"
     "  iterations: 3\n";
 
@@ -48,6 +49,7 @@ TEST(ModelCard, ReadsEveryKeyAndResolvesTheModelBesideTheCard) {
   EXPECT_EQ(card.BackgroundIndex(), 0);
   EXPECT_EQ(card.refine.working_side, 100);
   EXPECT_FLOAT_EQ(card.refine.suppress_below, 0.3f);
+  EXPECT_FLOAT_EQ(card.refine.movable_bias, -0.75f);
   EXPECT_EQ(card.refine.crf_options.iterations, 3);
 }
 
