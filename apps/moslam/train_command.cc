@@ -5,6 +5,7 @@
 //                           --out DIR [--grey] [--epochs 20] [--batch 8] [--lr 1e-3] ...
 //   moslam train cues       <data> --colour-model M --grey-model M --out DIR [--eval-labels DIR]
 //   moslam train segmenter  <data> --cues DIR --init-classifier M --out DIR [--epochs 20] ...
+//   moslam train average    --models M1,M2[,...] --out DIR   (weight average of segmenters)
 // Every training command resumes from DIR/checkpoint.mnet with --resume.
 #include <string>
 
@@ -13,6 +14,7 @@
 
 #include "commands.h"
 #include "moslam/util/error.h"
+#include "moslam/weak/model_average.h"
 #include "moslam/weak/training.h"
 
 namespace moslam::app {
@@ -22,6 +24,9 @@ void AddDataOptions(CLI::App* cmd, weak::DataSource* data) {
   cmd->add_option("--camvid", data->camvid, "CamVid root (train/, trainannot/, ...)");
   cmd->add_option("--split", data->split, "CamVid split")->capture_default_str();
   cmd->add_option("--synthetic", data->synthetic, "`moslam synth --train` output folder");
+  cmd->add_flag("--synthetic-crop-labels", data->synthetic_crop_labels,
+                "label crops and --label-grid cells of synthetic frames by what they contain "
+                "(counted on the generator's eval_only/class images, as CamVid's crops are)");
   cmd->add_option("--list", data->list, "image list: `<image> <class> ...` per line");
   cmd->add_option("--classes", data->classes, "classes file for --list: `<id> <name> <movable>`");
   cmd->add_option("--keep-classes", data->keep_classes,
@@ -203,6 +208,19 @@ void AddTrainCommand(CLI::App& app) {
     }
     weak::TrainSegmenter(segmenter);
   });
+
+  static weak::AverageOptions average;
+  CLI::App* a = train->add_subcommand(
+      "average",
+      "weight average of segmenters trained from the same classifier and --seed (a model soup: "
+      "one network's inference time)");
+  a->add_option("--models", average.models, "segmenter model files (.mnet), at least two")
+      ->delimiter(',')
+      ->required();
+  a->add_option("--out", average.out, "output folder (model.mnet, report.json)")->required();
+  a->add_flag("--half,!--float", average.half, "store float16 weights (as training does)")
+      ->capture_default_str();
+  a->callback([] { weak::AverageSegmenterFiles(average); });
 }
 
 }  // namespace moslam::app

@@ -214,8 +214,8 @@ void RequireLabelImages(const ImageList& list, const AugmentOptions& options,
   for (const ImageListEntry& entry : list.entries) {
     if (entry.label_image.empty()) {
       ThrowInput(
-          "{}: a label grid needs crop labels, which only data with label images (CamVid) has; "
-          "{} has none",
+          "{}: a label grid needs crop labels, which only data with label images has (CamVid, "
+          "or synthetic frames with --synthetic-crop-labels); {} has none",
           what, entry.image);
     }
   }

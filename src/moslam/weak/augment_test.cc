@@ -208,6 +208,41 @@ TEST(AugmentTest, LabelGridCellsAreLabelledByWhatTheyContainInTheSamplesFrame) {
   EXPECT_TRUE(LoadSample(list, 0, options, rng, false).cell_classes.empty());
 }
 
+TEST(AugmentTest, SyntheticFramesWithCropLabelsGetGridCellsThroughKeptClasses) {
+  // A generator training folder (classes.txt ids, 255 = unlabelled): a person (id 1) fills the
+  // left quarter, a chair (id 3) the right quarter. Keeping only the person, the left cell of a
+  // 2x1 grid holds it and the right cell nothing (the chair became background, not a class).
+  TempDir dir;
+  fs::create_directories(fs::path(dir.path()) / "rgb");
+  fs::create_directories(fs::path(dir.path()) / "eval_only/class");
+  cv::imwrite(dir.path() + "/rgb/000000.png", cv::Mat(kRows, kCols, CV_8UC3, cv::Scalar(90)));
+  cv::Mat ids(kRows, kCols, CV_8UC1, cv::Scalar(0));
+  ids(cv::Rect(0, 0, kCols / 4, kRows)).setTo(1);
+  ids(cv::Rect(3 * kCols / 4, 0, kCols / 4, kRows)).setTo(3);
+  ids(cv::Rect(kCols / 2, 0, 4, 4)).setTo(255);
+  cv::imwrite(dir.path() + "/eval_only/class/000000.png", ids);
+  dir.Write("classes.txt",
+            "0 background 0\n1 person 1\n2 car 1\n3 chair 0\n4 tvmonitor 0\n5 diningtable 0\n");
+  dir.Write("labels.txt", "rgb/000000.png person chair\n");
+  const ImageList list = KeepClasses(ReadSyntheticTraining(dir.path(), true), {"person"});
+  AugmentOptions options = SmallOutput();
+  options.label_grid_cols = 2;
+  options.label_grid_rows = 1;
+  options.crop_probability = 0.0;
+  options.flip = false;
+  RequireLabelImages(list, options, "test");
+  std::mt19937_64 rng(3);
+  const Sample s = LoadSample(list, 0, options, rng, true);
+  EXPECT_THAT(s.classes, ElementsAre(0));
+  ASSERT_EQ(s.cell_classes.size(), 2u);
+  EXPECT_THAT(s.cell_classes[0], ElementsAre(0));
+  EXPECT_TRUE(s.cell_classes[1].empty());
+  // Without crop labels the same folder cannot have a grid.
+  const ImageList plain = KeepClasses(ReadSyntheticTraining(dir.path(), false), {"person"});
+  EXPECT_THAT(ErrorOf([&] { RequireLabelImages(plain, options, "test"); }),
+              HasSubstr("--synthetic-crop-labels"));
+}
+
 TEST(AugmentTest, ASeedFixesTheSample) {
   TempDir dir;
   std::string cue_path;

@@ -246,10 +246,27 @@ ImageList ReadCamVid(const std::string& root, const std::string& split, double m
   return list;
 }
 
-ImageList ReadSyntheticTraining(const std::string& folder) {
+ImageList ReadSyntheticTraining(const std::string& folder, bool crop_labels) {
   RequireDirectory(folder, "synthetic training folder");
   const ImageList classes = ReadClassesFile((fs::path(folder) / "classes.txt").string());
-  return ReadImageList((fs::path(folder) / "labels.txt").string(), classes);
+  ImageList list = ReadImageList((fs::path(folder) / "labels.txt").string(), classes);
+  if (!crop_labels) return list;
+  // Class ids in the generator's images are classes.txt's: background first when there is one.
+  const int offset = list.background.empty() ? 0 : 1;
+  list.label_to_class.assign(list.class_names.size() + offset, -1);
+  for (int c = 0; c < list.num_classes(); ++c) list.label_to_class[c + offset] = c;
+  list.label_min_fraction = kSyntheticLabelMinFraction;
+  const fs::path labels_dir = fs::path(folder) / "eval_only" / "class";
+  for (ImageListEntry& entry : list.entries) {
+    entry.label_image = (labels_dir / fs::path(entry.image).stem()).string() + ".png";
+    std::error_code ec;
+    if (!fs::is_regular_file(entry.label_image, ec)) {
+      ThrowInFile(entry.label_image, "class image of " + entry.image +
+                                         " does not exist (crop labels need the generator's "
+                                         "eval_only/class)");
+    }
+  }
+  return list;
 }
 
 ImageList KeepClasses(const ImageList& list, const std::vector<std::string>& keep,

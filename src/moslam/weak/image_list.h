@@ -92,7 +92,16 @@ std::vector<int> CropLabels(const cv::Mat& label_ids, const cv::Rect& roi, int n
 // per-cell cue operations of cues.h share, so that a cell's labels and its pixels agree.
 cv::Rect GridCell(const cv::Rect& area, int r, int c, int rows, int cols);
 
-// The synthetic generator's training mode folder (rgb/, labels.txt, classes.txt).
-ImageList ReadSyntheticTraining(const std::string& folder);
+// The synthetic generator's training mode folder (rgb/, labels.txt, classes.txt). With
+// `crop_labels`, each entry's label_image is the generator's eval_only/class/<stem>.png (ids of
+// classes.txt, 255 = no label), so that crops and label-grid cells are labelled by what they
+// contain, exactly as CamVid's are: the image is read only to count classes (CropLabels), by the
+// generator's own image-level rule (kSyntheticLabelMinFraction); no pixel label reaches a loss.
+// InputError naming a missing class image.
+ImageList ReadSyntheticTraining(const std::string& folder, bool crop_labels = false);
+
+// The generator's image-level rule (synth/generator.cc LabelMinPixels: 200 pixels of a 640x480
+// frame, scaled with the frame's area) as a fraction of the image, used for crops and cells.
+inline constexpr double kSyntheticLabelMinFraction = 200.0 / (640.0 * 480.0);
 
 }  // namespace moslam::weak

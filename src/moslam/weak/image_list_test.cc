@@ -143,6 +143,30 @@ TEST(ImageListTest, SyntheticTrainingFolder) {
   EXPECT_TRUE(list.entries[0].label_image.empty());
 }
 
+TEST(ImageListTest, SyntheticCropLabelsComeFromTheGeneratorsClassImages) {
+  TempDir dir;
+  WriteImage(dir, "rgb/000000.png");
+  dir.Write("classes.txt", kSynthClasses);
+  dir.Write("labels.txt", "rgb/000000.png person\n");
+  const ImageList plain = ReadSyntheticTraining(dir.path(), false);
+  EXPECT_TRUE(plain.entries[0].label_image.empty());
+  EXPECT_TRUE(plain.label_to_class.empty());
+  // Without the class image the request is refused, naming the missing file.
+  EXPECT_THAT(ErrorOf([&] { ReadSyntheticTraining(dir.path(), true); }),
+              HasSubstr("eval_only/class/000000.png"));
+  fs::create_directories(fs::path(dir.path()) / "eval_only/class");
+  cv::imwrite(dir.path() + "/eval_only/class/000000.png", cv::Mat(8, 8, CV_8UC1, cv::Scalar(1)));
+  const ImageList list = ReadSyntheticTraining(dir.path(), true);
+  ASSERT_EQ(list.entries.size(), 1u);
+  EXPECT_EQ(fs::path(list.entries[0].label_image).lexically_normal(),
+            (fs::path(dir.path()) / "eval_only/class/000000.png").lexically_normal());
+  // Id 0 (background) is no class; ids 1..5 are classes 0..4 (person ... diningtable).
+  EXPECT_THAT(list.label_to_class, ElementsAre(-1, 0, 1, 2, 3, 4));
+  EXPECT_DOUBLE_EQ(list.label_min_fraction, kSyntheticLabelMinFraction);
+  // Whole-image labels stay those of labels.txt.
+  EXPECT_THAT(list.entries[0].classes, ElementsAre(0));
+}
+
 TEST(ImageListTest, SplitHoldoutTakesEveryKthEntry) {
   ImageList list;
   list.class_names = {"a"};

@@ -33,6 +33,9 @@ struct DataSource {
   std::string camvid;   // CamVid root (ReadCamVid), with `split`
   std::string split = "train";
   std::string synthetic;  // a `moslam synth --train` folder
+  // Synthetic data only: label crops and label-grid cells by what they contain, counted on the
+  // generator's class images as CamVid's are on its label images (ReadSyntheticTraining).
+  bool synthetic_crop_labels = false;
   // When not empty: only these classes are kept, all others merged into a "background" class
   // (KeepClasses), e.g. {Car, Pedestrian, Bicyclist} on CamVid.
   std::vector<std::string> keep_classes;

@@ -17,6 +17,10 @@ void DataSource::Check() const {
     throw InputError("training data: --list " + list + " needs --classes (a classes file)");
   }
   if (!camvid.empty() && split.empty()) throw InputError("training data: empty CamVid --split");
+  if (synthetic_crop_labels && synthetic.empty()) {
+    throw InputError(
+        "training data: --synthetic-crop-labels needs a synthetic folder (--synthetic)");
+  }
 }
 
 ImageList DataSource::Load() const {
@@ -25,7 +29,7 @@ ImageList DataSource::Load() const {
   if (!camvid.empty()) {
     loaded = ReadCamVid(camvid, split);
   } else if (!synthetic.empty()) {
-    loaded = ReadSyntheticTraining(synthetic);
+    loaded = ReadSyntheticTraining(synthetic, synthetic_crop_labels);
   } else {
     loaded = ReadImageList(list, ReadClassesFile(classes));
   }
