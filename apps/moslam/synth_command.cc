@@ -1,7 +1,7 @@
 // `moslam synth`: synthetic dynamic sequences with exact ground truth (docs/SYNTH.md).
 //
 //   moslam synth --preset w_xyz --seed 1 --out DIR [--frames K] [--textures DIR] [--motion-blur]
-//   moslam synth --train N --seed S --out DIR
+//   moslam synth --train N --seed S --out DIR [--textures-per-kind 4]
 //   moslam synth --contact-sheet docs/synth_contact_sheet.png
 //   moslam synth --list-presets
 #include <string>
@@ -92,6 +92,9 @@ void AddSynthCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--textures", o.textures_dir,
                   "Folder of photographs added to the built-in procedural textures");
+  cmd->add_option("--textures-per-kind", o.textures_per_kind,
+                  "Procedural textures of each kind (1-64; more: more varied training frames)")
+      ->capture_default_str();
   cmd->add_flag("--motion-blur", o.motion_blur, "Blur colour over a 1/60 s exposure");
   cmd->add_option("--width", o.width, "Image width (0: the preset's)");
   cmd->add_option("--height", o.height, "Image height (0: the preset's)");

@@ -41,7 +41,7 @@ cv::Mat MovingMask(const cv::Mat& instance, const std::vector<uint16_t>& moving)
 }
 
 TextureSet LoadTextures(const GeneratorOptions& o, uint64_t seed, int photo_phase) {
-  TextureSet set = TextureSet::Procedural(seed, 4, o.texture_size);
+  TextureSet set = TextureSet::Procedural(seed, o.textures_per_kind, o.texture_size);
   if (!o.textures_dir.empty()) set.AddPhotos(o.textures_dir, o.texture_size, 2, photo_phase);
   return set;
 }
@@ -116,6 +116,9 @@ void GeneratorOptions::Check() const {
   }
   if (texture_size < 64 || (texture_size & (texture_size - 1)) != 0 || texture_size > 4096) {
     ThrowInput("synth: texture_size must be a power of two in 64..4096, got {}", texture_size);
+  }
+  if (textures_per_kind < 1 || textures_per_kind > 64) {
+    ThrowInput("synth: --textures-per-kind must be in 1..64, got {}", textures_per_kind);
   }
   if (png_compression < 0 || png_compression > 9) {
     ThrowInput("synth: png_compression must be in 0..9, got {}", png_compression);

@@ -23,9 +23,14 @@ struct GeneratorOptions {
   bool motion_blur = false;   // average 4 renders over a 1/60 s exposure (colour only)
   int width = 0, height = 0;  // 0: the preset's size (640x480 indoor, 1226x370 street)
   int texture_size = 512;     // procedural texture size (power of two)
-  int png_compression = 1;    // 0-9: zlib level of every PNG (1: fast, ~1.5x larger than 9)
-  bool sensor_noise = true;   // false: exact depth and colour (for ground-truth tests)
-  bool progress = true;       // log progress lines
+  // Procedural textures of every kind (wall, floor, clothing, ...), 1..64. The presets' look is
+  // that of the default 4; a larger set is a superset (its first 4 of a kind are the default's)
+  // that gives training frames more appearances: a network trained on one seed's 4 floors and 4
+  // shirts learns those textures, not people (docs/WEAK.md, "Texture variety").
+  int textures_per_kind = 4;
+  int png_compression = 1;   // 0-9: zlib level of every PNG (1: fast, ~1.5x larger than 9)
+  bool sensor_noise = true;  // false: exact depth and colour (for ground-truth tests)
+  bool progress = true;      // log progress lines
   // Also write depth_gt/<stamp>.png: the exact depth (no noise, no holes; factor 5000) for
   // ground-truth checks (synth/check.h). RGB-D presets only.
   bool write_exact_depth = false;
@@ -53,7 +58,7 @@ GenerateStats GenerateSequence(const GeneratorOptions& options);
 
 // Training mode: `count` independent frames (rgb/, labels.txt, and eval_only/class/ masks) from
 // random scenes disjoint from the presets. Uses options.seed, out, textures_dir, width, height,
-// texture_size, png_compression, sensor_noise.
+// texture_size, textures_per_kind, png_compression, sensor_noise.
 GenerateStats GenerateTraining(const GeneratorOptions& options, int count);
 
 // One rendered frame with its sensor effects and labels.

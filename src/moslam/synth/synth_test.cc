@@ -343,6 +343,38 @@ TEST(Synth, OptionsAreChecked) {
   o.height = 0;
   EXPECT_THROW(o.Check(), InputError);
   EXPECT_THROW(FindPreset("walking"), InputError);
+  o.height = 100;
+  EXPECT_NO_THROW(o.Check());
+  o.textures_per_kind = 0;
+  EXPECT_THROW(o.Check(), InputError);
+  o.textures_per_kind = 65;
+  EXPECT_THROW(o.Check(), InputError);
+}
+
+TEST(Synth, MoreTexturesPerKindExtendTheDefaultSet) {
+  // The first textures of each kind do not depend on how many there are, so the presets' look
+  // (4 a kind) is kept inside a larger training set.
+  const TextureSet four = TextureSet::Procedural(7, 4, 128);
+  const TextureSet six = TextureSet::Procedural(7, 6, 128);
+  int differing_extra = 0;
+  for (int k = 0; k < static_cast<int>(TextureKind::kCount); ++k) {
+    const auto kind = static_cast<TextureKind>(k);
+    ASSERT_EQ(four.OfKind(kind).size(), 4u);
+    ASSERT_EQ(six.OfKind(kind).size(), 6u);
+    for (int i = 0; i < 4; ++i) {
+      const cv::Mat a = four.textures()[four.OfKind(kind)[i]].rgb;
+      const cv::Mat b = six.textures()[six.OfKind(kind)[i]].rgb;
+      EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << "kind " << k << " texture " << i;
+    }
+    for (int i : six.OfKind(kind)) {
+      // Every texture has content (fine noise once rendered small textures black).
+      EXPECT_GT(cv::norm(six.textures()[i].rgb, cv::NORM_INF), 0.0) << six.textures()[i].name;
+    }
+    const cv::Mat first = six.textures()[six.OfKind(kind)[0]].rgb;
+    const cv::Mat extra = six.textures()[six.OfKind(kind)[5]].rgb;
+    differing_extra += cv::norm(first, extra, cv::NORM_INF) > 0;
+  }
+  EXPECT_EQ(differing_extra, static_cast<int>(TextureKind::kCount));
 }
 
 }  // namespace

@@ -49,7 +49,9 @@ class Lattice {
 cv::Mat Fractal(Rng& rng, int size, int base_cells, int octaves, float gain) {
   cv::Mat out(size, size, CV_32F, cv::Scalar(0));
   float amplitude = 1.0f, total = 0.0f;
-  int cells = base_cells;
+  // At least one octave: a lattice finer than the image (small test textures) would leave no
+  // octave at all and a 0/0 texture, which rendered black.
+  int cells = std::min(base_cells, size);
   for (int o = 0; o < octaves && cells <= size; ++o, cells *= 2, amplitude *= gain) {
     const Lattice lattice(rng, cells);
     for (int y = 0; y < size; ++y) {
