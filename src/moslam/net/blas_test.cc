@@ -2,8 +2,8 @@
 // and Ceres, whose SuiteSparse dependency brings BLAS and LAPACK onto the link line). The
 // symbol lookup takes the first library in load order that defines sgemm_; when ATLAS's
 // libf77blas is a direct dependency of the executable it wins over libblas.so.3, the one
-// Debian's alternatives point at OpenBLAS, and the networks run 2.5x slower (CMakeLists.txt,
-// BLA_VENDOR).
+// Debian's alternatives point at OpenBLAS, and the networks run 2.5x slower (CMakeLists.txt
+// keeps ATLAS off the link line).
 #include <dlfcn.h>
 
 #include <string>
@@ -26,7 +26,8 @@ TEST(Blas, SgemmComesFromTheAlternativesBlasNotFromAtlasF77Interface) {
   const std::string library = info.dli_fname;
   EXPECT_EQ(library.find("f77blas"), std::string::npos)
       << "sgemm_ resolves to " << library << " (Ceres " << CERES_VERSION_STRING
-      << "'s BLAS on the link line): set BLA_VENDOR before find_package(Ceres)";
+      << "'s BLAS on the link line): see the filter of Ceres::ceres's link interface and "
+         "BLA_VENDOR in CMakeLists.txt";
 }
 
 }  // namespace
