@@ -2,6 +2,8 @@
 #include "moslam/slam/camera_model.h"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 #include <utility>
 
 #include <spdlog/spdlog.h>
@@ -11,6 +13,7 @@
 #include "moslam/slam/sim3_solver.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
+#include "moslam/vocab/vocabulary.h"
 
 namespace moslam::slam {
 
@@ -23,6 +26,7 @@ void LoopCloserOptions::Check() const {
   if (min_sim3_inliers < 3) throw InputError("LoopCloserOptions.min_sim3_inliers must be >= 3");
   if (min_loop_matches < 1) throw InputError("LoopCloserOptions.min_loop_matches must be >= 1");
   if (num_threads < 1) throw InputError("LoopCloserOptions.num_threads must be >= 1");
+  verification.Check();
 }
 
 namespace {
@@ -66,6 +70,7 @@ LoopCloser::LoopCloser(map::Map* map, const camera::PinholeCamera& camera, doubl
                        KeyFrameDatabase* database, const LoopCloserOptions& options)
     : map_(map),
       camera_(camera),
+      bf_(bf),
       model_(CameraModelFor(camera, bf)),
       database_(database),
       options_((options.Check(), options)) {
@@ -130,7 +135,8 @@ bool LoopCloser::DetectLoop(const KeyFramePtr& kf, std::vector<KeyFramePtr>* con
   std::set<uint64_t> excluded = {kf->id};
   for (const auto& n : kf->BestCovisibles(-1)) excluded.insert(n->id);
   std::vector<KeyFramePtr> found;
-  for (const auto& c : database_->DetectLoopCandidates(*kf, database_->MinCovisibleScore(*kf))) {
+  const double min_score = database_->MinCovisibleScore(*kf);
+  for (const auto& c : database_->DetectLoopCandidates(*kf, min_score)) {
     if (c && !c->bad() && !excluded.count(c->id)) found.push_back(c);
   }
   if (found.empty()) {
@@ -165,11 +171,25 @@ bool LoopCloser::DetectLoop(const KeyFramePtr& kf, std::vector<KeyFramePtr>* con
     if (!any) next.push_back({group.keyframes, 0});
   }
   groups_ = std::move(next);
+  if (!consistent->empty() && spdlog::should_log(spdlog::level::debug)) {
+    std::string scores;
+    for (const auto& c : *consistent) {
+      scores += fmt::format(" kf {} ({:.3f})", c->id, vocab::Vocabulary::Score(kf->bow, c->bow));
+    }
+    spdlog::debug("loop candidates of kf {} (min covisible score {:.3f}), consistent:{}", kf->id,
+                  min_score, scores);
+  }
   return !consistent->empty();
 }
 
 bool LoopCloser::ComputeSim3(const KeyFramePtr& kf, const std::vector<KeyFramePtr>& candidates,
                              DetectedLoop* loop) {
+  // ORB-SLAM2 takes the first candidate that passes. Among aliases (a street of identical
+  // houses) several can pass, each a rigid shift of the others; the one that asks the least
+  // correction of the odometry is the one drift explains best, so every candidate is tried and
+  // that one is kept (without verification: the first, as ORB-SLAM2).
+  bool any = false;
+  double best_correction = 0.0;
   for (const auto& cand : candidates) {
     // The direct index when both keyframes have one, brute force otherwise.
     PointMatches matches = !kf->bow_features.empty() && !cand->bow_features.empty()
@@ -218,14 +238,38 @@ bool LoopCloser::ComputeSim3(const KeyFramePtr& kf, const std::vector<KeyFramePt
     spdlog::debug("loop candidate kf {} -> {}: {} matches, {} RANSAC inliers, {} refined, {} total",
                   kf->id, cand->id, corr.size(), solved->num_inliers, refined.num_inliers, total);
     if (total < options_.min_loop_matches) continue;
-    loop->current = kf;
-    loop->loop = cand;
-    loop->S_cur_world = S_cur_world;
-    loop->matched = std::move(matched);
-    loop->loop_points = std::move(loop_points);
-    return true;
+    DetectedLoop found{kf, cand, S_cur_world, std::move(matched), std::move(loop_points)};
+    if (!options_.verify) {
+      *loop = std::move(found);
+      return true;
+    }
+    const LoopVerification v = Verify(found, refined.num_inliers, total);
+    if (!v.accepted || (any && v.correction_m >= best_correction)) continue;
+    any = true;
+    best_correction = v.correction_m;
+    *loop = std::move(found);
   }
-  return false;
+  return any;
+}
+
+LoopVerification LoopCloser::Verify(const DetectedLoop& loop, int inliers, int matches) {
+  const LoopVerification v = VerifyLoop(*map_, loop, camera_, bf_, options_.verification);
+  const auto level = v.accepted ? spdlog::level::debug : spdlog::level::info;
+  spdlog::log(level,
+              "loop kf {} -> {} ({} Sim3 inliers, {} matches) {}: correction {:.3g} m / {:.3g} "
+              "deg after a path of {:.3g} m / {:.3g} deg, log scale {:.3g}; depths {}/{} "
+              "agree; neighbours {}/{}; {} cells",
+              loop.current->id, loop.loop->id, inliers, matches,
+              v.accepted ? "verified" : "refused by the " + v.rejected_by + " check",
+              v.correction_m, v.correction_deg, v.path_m, v.path_deg, v.log_scale,
+              static_cast<int>(std::lround(v.depth_consistent * v.depth_samples)), v.depth_samples,
+              v.neighbours_passing, v.neighbours_tried, v.spread_cells);
+  if (!v.accepted) {
+    std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+    ++stats_.loops_rejected;
+    stats_.rejected.emplace_back(loop.current->id, loop.loop->id);
+  }
+  return v;
 }
 
 void LoopCloser::StartGlobalBundleAdjustment() {

@@ -6,7 +6,10 @@
 //  2. Sim(3) with each candidate: bag-of-words matches of their map points (SearchByBoW), RANSAC
 //     (slam/sim3_solver.h), guided matching (SearchBySim3), refinement (optim::OptimizeSim3),
 //     accepted with >= 20 inliers, then the points of the candidate's covisible keyframes
-//     projected into the current one: >= 40 matches close the loop;
+//     projected into the current one: >= 40 matches make a loop;
+//  2b. verification against the map (slam/loop_verification.h): the correction within the drift
+//     odometry allows, depths, the current keyframe's neighbours, the matches' spread; a refused
+//     loop moves nothing; of the loops that pass, the one with the smallest correction is closed;
 //  3. correction (slam/loop_correction.h): Sim(3) propagation, point fusion, essential graph;
 //  4. a global bundle adjustment of a copy of the map in a thread of its own, merged when done.
 //
@@ -33,6 +36,7 @@
 #include "moslam/optim/observation.h"
 #include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/loop_correction.h"
+#include "moslam/slam/loop_verification.h"
 
 namespace moslam::slam {
 
@@ -43,6 +47,11 @@ struct LoopCloserOptions {
   int min_point_matches = 20;            // descriptor matches to try a candidate (ORB-SLAM2: 20)
   int min_sim3_inliers = 20;             // after RANSAC and after refinement (ORB-SLAM2: 20)
   int min_loop_matches = 40;             // after projecting the loop side (ORB-SLAM2: 40)
+  // Checks of a found loop against the map before it is corrected (slam/loop_verification.h);
+  // verify = false closes every loop that passed ORB-SLAM2's tests (moslam run
+  // --no-loop-verification, for comparisons).
+  bool verify = true;
+  LoopVerificationOptions verification;
   bool global_bundle_adjustment = true;  // after each closed loop
   bool synchronous = false;              // global BA in the caller's thread (deterministic mode)
   int num_threads = 1;                   // Ceres threads in the global BA
@@ -54,9 +63,11 @@ struct LoopCloserStats {
   int keyframes = 0;              // processed
   int candidates_consistent = 0;  // keyframes with a consistent candidate
   int loops_closed = 0;
+  int loops_rejected = 0;  // found (ORB-SLAM2's tests passed) but refused by the verification
   int global_ba_merged = 0;
-  int global_ba_dropped = 0;                         // stale (another correction meanwhile)
-  std::vector<std::pair<uint64_t, uint64_t>> loops;  // (current, loop) keyframe ids
+  int global_ba_dropped = 0;                            // stale (another correction meanwhile)
+  std::vector<std::pair<uint64_t, uint64_t>> loops;     // (current, loop) keyframe ids
+  std::vector<std::pair<uint64_t, uint64_t>> rejected;  // (current, loop) refused
 };
 
 class LoopCloser {
@@ -77,11 +88,14 @@ class LoopCloser {
   bool ComputeSim3(const std::shared_ptr<map::KeyFrame>& kf,
                    const std::vector<std::shared_ptr<map::KeyFrame>>& candidates,
                    DetectedLoop* loop);
+  // VerifyLoop with the log line and the stats of a refusal.
+  LoopVerification Verify(const DetectedLoop& loop, int inliers, int matches);
   void StartGlobalBundleAdjustment();
   void RunGlobalBundleAdjustment(GlobalBundleJob job);
 
   map::Map* map_;
   camera::PinholeCamera camera_;
+  double bf_ = 0.0;
   optim::CameraModel model_;
   KeyFrameDatabase* database_;
   LoopCloserOptions options_;

@@ -152,6 +152,10 @@ class System::Impl : public KeyFrameSink {
     LoopCloserOptions l;
     l.fix_scale = !Mono(o);  // stereo/RGB-D maps have metric scale; monocular ones drift in scale
     l.global_bundle_adjustment = o.loop_global_bundle_adjustment;
+    l.verify = o.loop_verification;
+    // Monocular maps drift in scale as well as in pose: a correction may be a larger share of
+    // the path travelled (KITTI 07's monocular run drifts a few per cent, more at turns).
+    if (Mono(o)) l.verification.max_drift_ratio = 0.5;
     l.synchronous = o.deterministic;
     return l;
   }
@@ -266,6 +270,7 @@ class System::Impl : public KeyFrameSink {
     if (loop_closer_) {
       const LoopCloserStats loops = loop_closer_->Stats();
       summary.loops_closed = loops.loops_closed;
+      summary.loops_rejected = loops.loops_rejected;
       summary.global_ba_merged = loops.global_ba_merged;
     }
     summary.initialized_frame = initialized_frame_;

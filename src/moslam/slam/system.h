@@ -59,6 +59,10 @@ struct SystemOptions {
   // The full bundle adjustment after each closed loop
   // (LoopCloserOptions::global_bundle_adjustment).
   bool loop_global_bundle_adjustment = true;
+  // Loops are checked against the map before they move it (slam/loop_verification.h: drift
+  // bound, depths, neighbours, spread); off closes every loop ORB-SLAM2's tests accept (moslam
+  // run --no-loop-verification).
+  bool loop_verification = true;
   void Check() const;  // InputError naming the field
 };
 
@@ -104,6 +108,7 @@ struct MapSummary {
   int lost_frames = 0;
   int relocalizations = 0;         // frames relocalized (FrameReport::relocalized)
   int loops_closed = 0;            // loop corrections (LoopCloserStats)
+  int loops_rejected = 0;          // loops found but refused by the verification
   int global_ba_merged = 0;        // full bundle adjustments after a loop, written back
   int mapping_steps = 0;           // keyframes processed by local mapping
   double mapping_ms_median = 0.0;  // per processed keyframe

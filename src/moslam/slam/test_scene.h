@@ -39,9 +39,11 @@ inline Scene RandomScene(int n, unsigned seed) {
   return s;
 }
 
-// A keyframe whose keypoint i is scene point i (every point must project into the image).
+// A keyframe whose keypoint i is scene point i (every point must project into the image). With
+// bf > 0 every keypoint has its exact depth and right-image column (a stereo keyframe).
 inline std::shared_ptr<map::KeyFrame> ObserveScene(map::Map* map, const Scene& s,
-                                                   const geometry::SE3& T_cam_world) {
+                                                   const geometry::SE3& T_cam_world,
+                                                   double bf = 0.0) {
   const camera::PinholeCamera cam = TestCamera();
   feature::Frame f;
   for (size_t i = 0; i < s.points.size(); ++i) {
@@ -57,6 +59,11 @@ inline std::shared_ptr<map::KeyFrame> ObserveScene(map::Map* map, const Scene& s
   f.descriptors = s.descriptors.clone();
   f.u_right.assign(s.points.size(), -1.0f);
   f.depth.assign(s.points.size(), -1.0f);
+  for (size_t i = 0; bf > 0.0 && i < s.points.size(); ++i) {
+    const double z = (T_cam_world * s.points[i]).z();
+    f.depth[i] = static_cast<float>(z);
+    f.u_right[i] = static_cast<float>(f.keypoints[i].pt.x - bf / z);
+  }
   for (int l = 0; l < 8; ++l) {
     const float sf = static_cast<float>(std::pow(1.2, l));
     f.scale_factors.push_back(sf);
