@@ -4,11 +4,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <string>
 
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
 #include "commands.h"
+#include "moslam/net/blas_core.h"
 #include "moslam/util/error.h"
 #include "moslam/util/log.h"
 
@@ -17,10 +19,25 @@ int main(int argc, char** argv) {
   // mapping threads on a 2-core machine that made a network 10-70x slower; libgomp reads its wait
   // policy when it is loaded, before main, so the only way to change it from here is to run
   // again with it set. A policy the user sets is kept.
+  bool run_again = false;
   if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
     setenv("OMP_WAIT_POLICY", "passive", 1);
-    execv("/proc/self/exe", argv);  // returns only on failure: go on with the default policy
+    run_again = true;
   }
+  // OpenBLAS chose its kernels when it loaded; where it fell back to generic ones on a CPU it
+  // does not know, the same re-run sets the right ones (net/blas_core.h). A coretype the user
+  // set is kept.
+  if (std::getenv("OPENBLAS_CORETYPE") == nullptr) {
+    const std::string core = moslam::net::OpenBlasCore();
+    if (const auto better =
+            moslam::net::BetterOpenBlasCore(core, moslam::net::CpuFeatures::Detect())) {
+      setenv("OPENBLAS_CORETYPE", better->c_str(), 1);
+      setenv(moslam::net::kOpenBlasFallbackVariable, core.c_str(), 1);
+      run_again = true;
+    }
+  }
+  // execv returns only on failure: go on with the defaults.
+  if (run_again) execv("/proc/self/exe", argv);
   CLI::App app{"moslam: movable-object-aware visual SLAM (ORB-SLAM2 family) and its tools"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "moslam 0.1.0");

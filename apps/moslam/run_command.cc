@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "moslam/io/dataset.h"
 #include "moslam/io/orbslam_settings.h"
+#include "moslam/net/blas_core.h"
 #include "moslam/runner/mask_source.h"
 #include "moslam/runner/outputs.h"
 #include "moslam/runner/run_loop.h"
@@ -46,6 +47,7 @@ struct RunArgs {
   bool monocular = false;
   bool quiet = false;
   bool no_loop_closing = false;
+  bool no_loop_verification = false;
   int mapping_nice = 10;
 };
 
@@ -93,6 +95,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.deterministic = args.deterministic;
   options.vocabulary_path = ResolveVocabulary(args.vocabulary);
   options.loop_closing = !args.no_loop_closing;
+  options.loop_verification = !args.no_loop_verification;
   options.background_nice = args.mapping_nice;
   options.Check();
   return std::make_unique<SystemTracker>(options);
@@ -179,8 +182,9 @@ void Run(const RunArgs& args) {
   description.mask_source = masks->Describe();
   description.deterministic = args.deterministic;
   description.realtime = args.realtime;
-  spdlog::info("{}: {} frames ({}), masks: {}", sequence.root, sequence.size(),
-               io::ToString(sequence.sensor), description.mask_source);
+  spdlog::info("{}: {} frames ({}), masks: {}; OpenBLAS kernels: {}", sequence.root,
+               sequence.size(), io::ToString(sequence.sensor), description.mask_source,
+               net::DescribeOpenBlasCore());
 
   const std::unique_ptr<runner::Tracker> tracker = MakeTracker(settings, sequence.sensor, args);
   const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
@@ -267,6 +271,9 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--quiet", args->quiet, "No progress line and only warnings in the log");
   command->add_flag("--no-loop-closing", args->no_loop_closing,
                     "Run without loop closing even with a vocabulary (to measure what it does)");
+  command->add_flag("--no-loop-verification", args->no_loop_verification,
+                    "Close every loop that ORB-SLAM2's tests accept, without checking it against "
+                    "the drift the odometry allows, depths, neighbours and spread (comparisons)");
   command
       ->add_option("--mapping-nice", args->mapping_nice,
                    "Nice increment (0-19) of the local-mapping and loop-closing threads, so "

@@ -12,6 +12,7 @@
 #include "moslam/eval/plot.h"
 #include "moslam/eval/report.h"
 #include "moslam/eval/statistics.h"
+#include "moslam/net/blas_core.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
 
@@ -242,6 +243,7 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                            {"median_ms", result.map.mapping_ms_median},
                            {"total_ms", result.map.mapping_ms_total}}},
                          {"loops_closed", result.map.loops_closed},
+                         {"loops_rejected", result.map.loops_rejected},
                          {"global_ba_merged", result.map.global_ba_merged},
                          {"times_ms", times},
                          {"breakdown_median_ms", Breakdown(result)},
@@ -253,6 +255,7 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                            {"format", io::ToString(d.format)},
                            {"sensor", io::ToString(d.sensor)}}},
                          {"mask_source", d.mask_source},
+                         {"blas_core", net::DescribeOpenBlasCore()},
                          {"deterministic", d.deterministic},
                          {"realtime", d.realtime}};
   json["ate"] = ate ? ate->json : nlohmann::json(nullptr);
