@@ -17,6 +17,7 @@
 #include "moslam/synth/check.h"
 #include "moslam/synth/generator.h"
 #include "moslam/synth/output_files.h"
+#include "moslam/synth/presets.h"
 #include "moslam/testing/shared_data.h"
 #include "moslam/util/error.h"
 
@@ -245,6 +246,43 @@ TEST(Synth, StaticPresetIsWalkingXyzWithoutPeople) {
   // Same room and camera path as w_xyz: identical ground truth.
   EXPECT_EQ(DataLines(fs::path(a.path()) / "groundtruth.txt"),
             DataLines(fs::path(b.path()) / "groundtruth.txt"));
+}
+
+// The aliasing presets' camera paths (docs/SYNTH.md): the straight ones never come back to a
+// place (so any loop closed there is false), the rings come back to their start once, pointing
+// the same way (so exactly one loop is true).
+TEST(Synth, AliasingPresetsRevisitAPlaceOnlyOnTheRings) {
+  const TextureSet textures = TextureSet::Procedural(1, 4, 64);
+  for (const char* name : {"street_repeat", "street_repeat_loop", "corridor", "corridor_loop"}) {
+    for (uint64_t seed : {1u, 2u}) {
+      const SequenceSpec spec = MakePreset(name, seed, textures);
+      const bool ring = std::string(name).find("loop") != std::string::npos;
+      const double rate = spec.info.rate_hz, scale = spec.info.stereo ? 10.0 : 1.0;
+      std::vector<geometry::SE3> poses;
+      for (int i = 0; i < spec.info.default_frames; ++i)
+        poses.push_back(spec.T_world_cam(i / rate));
+      // The closest earlier pose at least 10 s back, over the whole path.
+      double closest = 1e9, angle_there = 0.0;
+      for (size_t i = 0; i < poses.size(); ++i) {
+        for (size_t j = 0; j + static_cast<size_t>(10 * rate) < i; ++j) {
+          const double d = (poses[i].translation() - poses[j].translation()).norm();
+          if (d < closest) {
+            closest = d;
+            angle_there =
+                Eigen::AngleAxisd(poses[i].rotation() * poses[j].rotation().inverse()).angle();
+          }
+        }
+      }
+      SCOPED_TRACE(std::string(name) + " seed " + std::to_string(seed));
+      if (ring) {
+        EXPECT_LT(closest, 0.5 * scale);  // metres: 5 m on the street, 0.5 m in the corridor
+        EXPECT_LT(angle_there, 45.0 * M_PI / 180.0);  // the walker looks +-20 degrees about
+      } else {
+        // Every place is new: the path is a straight line, nothing 10 s back is near.
+        EXPECT_GT(closest, 5.0 * scale);
+      }
+    }
+  }
 }
 
 TEST(Synth, SeatedPresetPeopleMoveALittle) {
