@@ -255,15 +255,16 @@ bool LoopCloser::ComputeSim3(const KeyFramePtr& kf, const std::vector<KeyFramePt
 LoopVerification LoopCloser::Verify(const DetectedLoop& loop, int inliers, int matches) {
   const LoopVerification v = VerifyLoop(*map_, loop, camera_, bf_, options_.verification);
   const auto level = v.accepted ? spdlog::level::debug : spdlog::level::info;
-  spdlog::log(level,
-              "loop kf {} -> {} ({} Sim3 inliers, {} matches) {}: correction {:.3g} m / {:.3g} "
-              "deg after a path of {:.3g} m / {:.3g} deg, log scale {:.3g}; depths {}/{} "
-              "agree; neighbours {}/{}; {} cells",
-              loop.current->id, loop.loop->id, inliers, matches,
-              v.accepted ? "verified" : "refused by the " + v.rejected_by + " check",
-              v.correction_m, v.correction_deg, v.path_m, v.path_deg, v.log_scale,
-              static_cast<int>(std::lround(v.depth_consistent * v.depth_samples)), v.depth_samples,
-              v.neighbours_passing, v.neighbours_tried, v.spread_cells);
+  spdlog::log(
+      level,
+      "loop kf {} -> {} ({} Sim3 inliers, {} matches) {}: correction {:.3g} m / {:.3g} "
+      "deg after a path of {:.3g} m / {:.3g} deg ({:.3g} m apart), log scale {:.3g}; depths {}/{} "
+      "agree; neighbours {}/{}; {} cells",
+      loop.current->id, loop.loop->id, inliers, matches,
+      v.accepted ? "verified" : "refused by the " + v.rejected_by + " check", v.correction_m,
+      v.correction_deg, v.path_m, v.path_deg, v.displacement_m, v.log_scale,
+      static_cast<int>(std::lround(v.depth_consistent * v.depth_samples)), v.depth_samples,
+      v.neighbours_passing, v.neighbours_tried, v.spread_cells);
   if (!v.accepted) {
     std::lock_guard<std::mutex> stats_lock(stats_mutex_);
     ++stats_.loops_rejected;

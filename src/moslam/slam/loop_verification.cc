@@ -19,6 +19,7 @@ void LoopVerificationOptions::Check() const {
   non_negative(max_rotation_ratio, "max_rotation_ratio");
   non_negative(max_rotation_floor_deg, "max_rotation_floor_deg");
   non_negative(max_log_scale, "max_log_scale");
+  non_negative(min_revisit_ratio, "min_revisit_ratio");
   non_negative(depth_tolerance_ratio, "depth_tolerance_ratio");
   if (!(min_depth_consistent >= 0.0 && min_depth_consistent <= 1.0)) {
     ThrowInput("LoopVerificationOptions.min_depth_consistent must be in [0, 1] (got {})",
@@ -77,6 +78,19 @@ bool DriftHolds(const map::Map& map, const DetectedLoop& loop, const LoopVerific
   }
   if (o.max_log_scale > 0.0 && std::abs(v->log_scale) > o.max_log_scale) {
     v->rejected_by = "scale";
+    return false;
+  }
+  return true;
+}
+
+// Rule 1b: the path since the loop keyframe came back, it did not just go on.
+bool RevisitHolds(const map::Map& map, const DetectedLoop& loop, const LoopVerificationOptions& o,
+                  LoopVerification* v) {
+  v->displacement_m = (loop.current->CameraCenter() - loop.loop->CameraCenter()).norm();
+  if (v->path_m == 0.0) PathLength(map, loop.loop->id, loop.current->id, &v->path_m, &v->path_deg);
+  if (!o.check_revisit || o.min_revisit_ratio <= 0.0) return true;
+  if (v->path_m < o.min_revisit_ratio * v->displacement_m) {
+    v->rejected_by = "revisit";
     return false;
   }
   return true;
@@ -189,8 +203,9 @@ LoopVerification VerifyLoop(const map::Map& map, const DetectedLoop& loop,
                             const camera::PinholeCamera& camera, double bf,
                             const LoopVerificationOptions& options) {
   LoopVerification v;
-  v.accepted = DriftHolds(map, loop, options, &v) && DepthHolds(loop, bf, options, &v) &&
-               NeighboursHold(loop, camera, options, &v) && SpreadHolds(loop, camera, options, &v);
+  v.accepted = DriftHolds(map, loop, options, &v) && RevisitHolds(map, loop, options, &v) &&
+               DepthHolds(loop, bf, options, &v) && NeighboursHold(loop, camera, options, &v) &&
+               SpreadHolds(loop, camera, options, &v);
   return v;
 }
 

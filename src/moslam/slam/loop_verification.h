@@ -6,7 +6,8 @@
 // scene (docs/EVALUATION.md, "False loops"). A false loop corrupts the whole map at once, so each
 // rule below is cheap and errs on the side of refusing:
 //
-//  1. drift bound: the correction the loop asks of the current keyframe's pose cannot exceed what
+//  1. drift bound (and 1b, a return, not a keyframe further along the same way): the correction the
+//  loop asks of the current keyframe's pose cannot exceed what
 //     odometry could have drifted on the way from the loop keyframe (a floor plus a fraction of
 //     the distance travelled, and likewise for the rotation); stereo and RGB-D maps are metric,
 //     so a 100 m jump after 300 m of driving is impossible. Pairwise consistency maximization
@@ -47,6 +48,13 @@ struct LoopVerificationOptions {
   double max_rotation_floor_deg = 10.0;  // degrees
   // Monocular (Sim(3)) loops: |log scale| of the correction at most this (0: no bound).
   double max_log_scale = 0.7;  // a factor of 2
+  // 1b. A loop is a return: the path travelled since the loop keyframe must be at least
+  // min_revisit_ratio x the straight distance between the two keyframes (odometry). Driving
+  // straight on (KITTI 06), a keyframe that sees what one 15 m back saw but shares too few points
+  // with it for the covisibility graph passes every other test, and its "loop" only pulls the
+  // map out of shape. 0: no check.
+  bool check_revisit = true;
+  double min_revisit_ratio = 1.5;
   // 2. Depth consistency (matches whose current keypoint has a depth): the loop-side point's
   // depth in the corrected current camera must agree with the measured depth within
   // depth_tolerance_ratio x depth + 3 x the stereo depth sigma at the keypoint's octave; at
@@ -74,12 +82,14 @@ struct LoopVerificationOptions {
 // What each rule measured, for the log and the tests.
 struct LoopVerification {
   bool accepted = false;
-  std::string rejected_by;  // "drift", "rotation", "scale", "depth", "neighbours", "spread"; empty
-                            // when accepted
+  std::string rejected_by;        // "drift", "rotation", "scale", "revisit", "depth", "neighbours",
+                                  // "spread"; empty
+                                  // when accepted
   double correction_m = 0.0;      // camera-centre correction (map units)
   double correction_deg = 0.0;    // rotation correction
   double path_m = 0.0;            // distance travelled from the loop keyframe (map units)
   double path_deg = 0.0;          // rotation accumulated on the way
+  double displacement_m = 0.0;    // odometry distance between the two keyframes
   double log_scale = 0.0;         // of the correction (0 for SE(3) loops)
   int depth_samples = 0;          // matches with a measured depth
   double depth_consistent = 1.0;  // fraction of them that agree

@@ -23,6 +23,7 @@ using testing::TestCamera;
 LoopVerificationOptions Only(const char* rule) {
   LoopVerificationOptions o;
   o.check_drift = std::string(rule) == "drift";
+  o.check_revisit = std::string(rule) == "revisit";
   o.check_depth = std::string(rule) == "depth";
   o.check_neighbours = std::string(rule) == "neighbours";
   o.check_spread = std::string(rule) == "spread";
@@ -87,6 +88,32 @@ TEST(LoopVerification, DriftBoundKeepsASmallCorrectionAndRefusesAJump) {
   // The same jump over a longer way is possible drift: 60 m travelled allow 6.3 m.
   Walk far(6.0);
   EXPECT_TRUE(VerifyLoop(far.map, far.Loop(CameraAt(55.0)), camera, 0.0, o).accepted);
+}
+
+TEST(LoopVerification, RevisitRuleWantsAReturnNotAKeyframeFurtherOn) {
+  const camera::PinholeCamera camera = TestCamera();
+  const LoopVerificationOptions o = Only("revisit");
+  // Straight on for 5 m: the keyframe 5 m back is no loop, whatever it looks like.
+  Walk straight;
+  LoopVerification v = VerifyLoop(straight.map, straight.Loop(CameraAt(5.0)), camera, 0.0, o);
+  EXPECT_FALSE(v.accepted);
+  EXPECT_EQ(v.rejected_by, "revisit");
+  EXPECT_NEAR(v.displacement_m, 5.0, 1e-9);
+  // Out 3 m and back to 0.2 m from the start: 5.8 m travelled, a return.
+  map::Map map;
+  const Scene scene = RandomScene(50, 3);
+  std::vector<std::shared_ptr<map::KeyFrame>> kfs;
+  for (double x : {0.0, 1.0, 2.0, 3.0, 2.0, 1.0, 0.2}) {
+    kfs.push_back(ObserveScene(&map, scene, CameraAt(x)));
+  }
+  DetectedLoop loop;
+  loop.current = kfs.back();
+  loop.loop = kfs.front();
+  loop.S_cur_world = geometry::Sim3(CameraAt(0.1));
+  loop.matched.assign(kfs.back()->points.size(), nullptr);
+  v = VerifyLoop(map, loop, camera, 0.0, o);
+  EXPECT_TRUE(v.accepted) << v.rejected_by;
+  EXPECT_NEAR(v.path_m, 5.8, 1e-9);
 }
 
 TEST(LoopVerification, DriftBoundRefusesAScaleJumpOfAMonocularLoop) {

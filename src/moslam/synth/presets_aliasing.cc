@@ -136,12 +136,14 @@ void Road(Builder& b, int road, int pavement, const SE3& T, double x0, double x1
 }
 
 // The houses' side of both presets: a street along the local x axis of T, houses on its +y
-// side over [x0, x1] and on its -y side over [y0, y1], lamp posts on both sides.
+// side over [x0, x1] and on its -y side over [y0, y1], lamp posts on both sides over [x0, x1].
 void Street(Builder& b, const Look& look, int post, const SE3& T, double x0, double x1, double y0,
             double y1) {
   HouseRow(b, look, T, x0, x1, 9.0);
   HouseRow(b, look, T * At(0, 0, 0, M_PI), -y1, -y0, 9.0);
-  for (double x = std::min(x0, y0) + 4.0; x < std::max(x1, y1); x += 12.0) {
+  // Posts along [x0, x1] only: the -y side's houses of a ring run round the corners, where a
+  // post would stand in the road the car turns into.
+  for (double x = x0 + 4.0; x < x1; x += 12.0) {
     for (int side = -1; side <= 1; side += 2) {
       AddCopy(b, T * At(x, side * 6.0, 2.0), {0.08, 0.08, 2.0}, post, 0.5);
     }
