@@ -50,7 +50,16 @@ TEST(ModelFile, ClassifierRoundTrip) {
   EXPECT_EQ(ToJson(loaded->config()), ToJson(net->config()));
   torch::NoGradGuard no_grad;
   const ClassifierOutput expected = net->forward(Input());
-  EXPECT_TRUE(torch::equal(loaded->forward(Input()).cams, expected.cams));
+  // The round trip is exact in the weights; the outputs of two forward passes need not be
+  // bit-identical, because OpenBLAS's AVX2 kernels with two threads split the sums differently
+  // for different buffer addresses (seen on an AMD EPYC with the Zen kernels; the generic
+  // Prescott kernels, or one thread, give equal outputs).
+  const auto saved = net->named_parameters(), read = loaded->named_parameters();
+  ASSERT_EQ(saved.size(), read.size());
+  for (const auto& item : saved) {
+    EXPECT_TRUE(torch::equal(item.value(), read[item.key()])) << item.key();
+  }
+  EXPECT_LT(MaxRelativeDifference(loaded->forward(Input()).cams, expected.cams), 1e-6);
   const ClassifierOutput h = half->forward(Input());
   EXPECT_EQ(h.cams.scalar_type(), torch::kFloat32);
   EXPECT_LT(MaxRelativeDifference(h.cams, expected.cams), 1e-2);

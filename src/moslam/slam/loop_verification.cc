@@ -144,6 +144,9 @@ bool NeighboursHold(const DetectedLoop& loop, const camera::PinholeCamera& camer
                                              camera, kNeighbourRadius, &matched);
     if (found >= o.min_neighbour_matches) ++v->neighbours_passing;
   }
+  // With a single neighbour outside the loop's group (a camera turning on the spot sees little
+  // of the loop side from the keyframe before) one view is no evidence either way.
+  if (v->neighbours_tried < 2) return true;
   const int needed = std::min(o.min_neighbours_passing, v->neighbours_tried);
   if (v->neighbours_passing < needed) {
     v->rejected_by = "neighbours";

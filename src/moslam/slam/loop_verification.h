@@ -65,7 +65,8 @@ struct LoopVerificationOptions {
   int min_depth_samples = 10;
   // 3. Neighbours: up to `neighbours` of the current keyframe's best covisible keyframes (not in
   // the loop's group) must each find at least min_neighbour_matches loop-side points by
-  // projection; at least min_neighbours_passing of them (or all, when fewer exist).
+  // projection; at least min_neighbours_passing of them (or all, when fewer exist; with fewer than
+  // two the rule does not apply: loop_room's true loop came with one neighbour that saw little).
   bool check_neighbours = true;
   int neighbours = 3;
   int min_neighbour_matches = 20;
