@@ -268,7 +268,6 @@ LoopVerification LoopCloser::Verify(const DetectedLoop& loop, int inliers, int m
   if (!v.accepted) {
     std::lock_guard<std::mutex> stats_lock(stats_mutex_);
     ++stats_.loops_rejected;
-    stats_.rejected.emplace_back(loop.current->id, loop.loop->id);
   }
   return v;
 }

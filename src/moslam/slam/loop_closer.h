@@ -8,7 +8,8 @@
 //     accepted with >= 20 inliers, then the points of the candidate's covisible keyframes
 //     projected into the current one: >= 40 matches make a loop;
 //  2b. verification against the map (slam/loop_verification.h): the correction within the drift
-//     odometry allows, depths, the current keyframe's neighbours, the matches' spread; a refused
+//     odometry allows, a return (not a keyframe further along the way), depths, the current
+//     keyframe's neighbours, the matches' spread; a refused
 //     loop moves nothing; of the loops that pass, the one with the smallest correction is closed;
 //  3. correction (slam/loop_correction.h): Sim(3) propagation, point fusion, essential graph;
 //  4. a global bundle adjustment of a copy of the map in a thread of its own, merged when done.
@@ -65,9 +66,8 @@ struct LoopCloserStats {
   int loops_closed = 0;
   int loops_rejected = 0;  // found (ORB-SLAM2's tests passed) but refused by the verification
   int global_ba_merged = 0;
-  int global_ba_dropped = 0;                            // stale (another correction meanwhile)
-  std::vector<std::pair<uint64_t, uint64_t>> loops;     // (current, loop) keyframe ids
-  std::vector<std::pair<uint64_t, uint64_t>> rejected;  // (current, loop) refused
+  int global_ba_dropped = 0;                         // stale (another correction meanwhile)
+  std::vector<std::pair<uint64_t, uint64_t>> loops;  // (current, loop) keyframe ids
 };
 
 class LoopCloser {

@@ -56,9 +56,10 @@ geometry::SE3 MetricPose(const geometry::Sim3& S_cam_world) {
   return geometry::SE3(S_cam_world.rotation(), S_cam_world.translation() / S_cam_world.scale());
 }
 
-// Rule 1: the correction against the odometry's possible drift.
-bool DriftHolds(const map::Map& map, const DetectedLoop& loop, const LoopVerificationOptions& o,
-                LoopVerification* v) {
+// What the odometry says about the loop: the correction it asks of the current keyframe, the
+// way travelled since the loop keyframe and the straight distance between the two. Rules 1 and
+// 1b compare these; the caller also ranks verified loops by the correction.
+void Measure(const map::Map& map, const DetectedLoop& loop, LoopVerification* v) {
   const map::KeyFrame& cur = *loop.current;
   const geometry::SE3 T_world_corrected = MetricPose(loop.S_cur_world).Inverse();
   v->correction_m = (T_world_corrected.translation() - cur.CameraCenter()).norm();
@@ -67,6 +68,11 @@ bool DriftHolds(const map::Map& map, const DetectedLoop& loop, const LoopVerific
       kRadToDeg;
   v->log_scale = std::log(loop.S_cur_world.scale());
   PathLength(map, loop.loop->id, cur.id, &v->path_m, &v->path_deg);
+  v->displacement_m = (cur.CameraCenter() - loop.loop->CameraCenter()).norm();
+}
+
+// Rule 1: the correction against the odometry's possible drift.
+bool DriftHolds(const LoopVerificationOptions& o, LoopVerification* v) {
   if (!o.check_drift) return true;
   if (v->correction_m > o.max_drift_floor_m + o.max_drift_ratio * v->path_m) {
     v->rejected_by = "drift";
@@ -84,10 +90,7 @@ bool DriftHolds(const map::Map& map, const DetectedLoop& loop, const LoopVerific
 }
 
 // Rule 1b: the path since the loop keyframe came back, it did not just go on.
-bool RevisitHolds(const map::Map& map, const DetectedLoop& loop, const LoopVerificationOptions& o,
-                  LoopVerification* v) {
-  v->displacement_m = (loop.current->CameraCenter() - loop.loop->CameraCenter()).norm();
-  if (v->path_m == 0.0) PathLength(map, loop.loop->id, loop.current->id, &v->path_m, &v->path_deg);
+bool RevisitHolds(const LoopVerificationOptions& o, LoopVerification* v) {
   if (!o.check_revisit || o.min_revisit_ratio <= 0.0) return true;
   if (v->path_m < o.min_revisit_ratio * v->displacement_m) {
     v->rejected_by = "revisit";
@@ -206,7 +209,8 @@ LoopVerification VerifyLoop(const map::Map& map, const DetectedLoop& loop,
                             const camera::PinholeCamera& camera, double bf,
                             const LoopVerificationOptions& options) {
   LoopVerification v;
-  v.accepted = DriftHolds(map, loop, options, &v) && RevisitHolds(map, loop, options, &v) &&
+  Measure(map, loop, &v);
+  v.accepted = DriftHolds(options, &v) && RevisitHolds(options, &v) &&
                DepthHolds(loop, bf, options, &v) && NeighboursHold(loop, camera, options, &v) &&
                SpreadHolds(loop, camera, options, &v);
   return v;
