@@ -1,7 +1,11 @@
 # Helpers that keep every module's CMakeLists.txt short and uniform.
 #
 #   moslam_module(<name> SOURCES ... DEPS ...)   -> library target moslam_<name>, alias moslam::<name>
-#   moslam_test(<module> <name> SOURCES ... DEPS ...) -> test binary, registered as <module>/<name>
+#   moslam_test(<module> <name> SOURCES ... DEPS ... [SHARDS n] [COST seconds])
+#       -> test binary, registered as <module>/<name>; with SHARDS n as n tests <module>/<name>/k
+#          (GoogleTest's sharding: test k of n runs every n-th test case), so that the long
+#          whole-system tests of one file run side by side under `ctest -j`; COST: the seconds
+#          it takes in a release build, so that ctest starts the long ones first
 #   moslam_benchmark(<name> SOURCES ... DEPS ...)     -> Google Benchmark program (not a test)
 
 function(moslam_module name)
@@ -17,19 +21,36 @@ function(moslam_test module name)
   if(NOT MOSLAM_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "SHARDS;COST" "SOURCES;DEPS" ${ARGN})
   set(target test_${module}_${name})
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} moslam::testing GTest::gtest GTest::gmock
                                           GTest::gtest_main)
-  add_test(NAME ${module}/${name} COMMAND ${target})
-  # Tests run from the source tree so that relative paths in messages are short; shared data is
-  # found through MOSLAM_SHARED (see src/moslam/testing/shared_data.h).
-  # OMP_WAIT_POLICY: libtorch's OpenMP threads must not spin while ctest runs tests in parallel
-  # (apps/moslam/main.cc says why).
-  set_tests_properties(${module}/${name} PROPERTIES WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
-                                                    LABELS ${module}
-                                                    ENVIRONMENT OMP_WAIT_POLICY=passive)
+  if(NOT ARG_SHARDS)
+    set(ARG_SHARDS 1)
+  endif()
+  if(NOT ARG_COST)
+    set(ARG_COST 0)
+  endif()
+  math(EXPR last "${ARG_SHARDS} - 1")
+  foreach(k RANGE ${last})
+    if(ARG_SHARDS EQUAL 1)
+      set(test_name ${module}/${name})
+      set(shard_env "")
+    else()
+      set(test_name ${module}/${name}/${k})
+      set(shard_env "GTEST_TOTAL_SHARDS=${ARG_SHARDS};GTEST_SHARD_INDEX=${k}")
+    endif()
+    add_test(NAME ${test_name} COMMAND ${target})
+    # Tests run from the source tree so that relative paths in messages are short; shared data
+    # is found through MOSLAM_SHARED (see src/moslam/testing/shared_data.h).
+    # OMP_WAIT_POLICY: libtorch's OpenMP threads must not spin while ctest runs tests in
+    # parallel (apps/moslam/main.cc says why).
+    set_tests_properties(${test_name} PROPERTIES WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
+                                                 LABELS ${module}
+                                                 COST ${ARG_COST}
+                                                 ENVIRONMENT "OMP_WAIT_POLICY=passive;${shard_env}")
+  endforeach()
 endfunction()
 
 function(moslam_benchmark name)

@@ -48,6 +48,7 @@ struct RunArgs {
   bool quiet = false;
   bool no_loop_closing = false;
   bool no_loop_verification = false;
+  bool no_short_loss_recovery = false;
   int mapping_nice = 10;
 };
 
@@ -96,6 +97,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.vocabulary_path = ResolveVocabulary(args.vocabulary);
   options.loop_closing = !args.no_loop_closing;
   options.loop_verification = !args.no_loop_verification;
+  options.short_loss_recovery = !args.no_short_loss_recovery;
   options.background_nice = args.mapping_nice;
   options.Check();
   return std::make_unique<SystemTracker>(options);
@@ -274,6 +276,9 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--no-loop-verification", args->no_loop_verification,
                     "Close every loop that ORB-SLAM2's tests accept, without checking it against "
                     "the drift the odometry allows, depths, neighbours and spread (comparisons)");
+  command->add_flag("--no-short-loss-recovery", args->no_short_loss_recovery,
+                    "Relocalize a frame lost a moment ago wherever it matches, as ORB-SLAM2, "
+                    "instead of near where the last velocity puts it (comparisons)");
   command
       ->add_option("--mapping-nice", args->mapping_nice,
                    "Nice increment (0-19) of the local-mapping and loop-closing threads, so "

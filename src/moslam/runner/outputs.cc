@@ -92,7 +92,7 @@ nlohmann::json Breakdown(const RunResult& r) {
 }
 
 struct StateCounts {
-  int ok = 0, lost = 0, not_initialized = 0, keyframes = 0, relocalized = 0;
+  int ok = 0, lost = 0, not_initialized = 0, keyframes = 0, relocalized = 0, recovered = 0;
 };
 
 StateCounts CountStates(const RunResult& result) {
@@ -103,6 +103,7 @@ StateCounts CountStates(const RunResult& result) {
     if (f.report.state == slam::TrackingState::kNotInitialized) ++counts.not_initialized;
     if (f.report.new_keyframe) ++counts.keyframes;
     if (f.report.relocalized) ++counts.relocalized;
+    if (f.report.recovered) ++counts.recovered;
   }
   return counts;
 }
@@ -233,6 +234,7 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                          {"lost", counts.lost},
                          {"not_initialized", counts.not_initialized},
                          {"relocalized", counts.relocalized},
+                         {"recovered", counts.recovered},
                          {"skipped", result.skipped},
                          {"new_keyframe_frames", counts.keyframes},
                          {"keyframes", result.map.keyframes},
@@ -269,10 +271,11 @@ std::string FormatSummary(const RunResult& result, const RunDescription& d,
   text += fmt::format("data set     {} ({}, {})\n", d.dataset_path, io::ToString(d.format),
                       io::ToString(d.sensor));
   text += fmt::format(
-      "frames       {} ({}:{}): {} tracked, {} lost, {} not initialized{}{}\n",
+      "frames       {} ({}:{}): {} tracked, {} lost, {} not initialized{}{}{}\n",
       result.frames.size(), result.first, result.last, counts.ok, counts.lost,
       counts.not_initialized,
       counts.relocalized > 0 ? fmt::format(", {} relocalized", counts.relocalized) : std::string(),
+      counts.recovered > 0 ? fmt::format(", {} recovered", counts.recovered) : std::string(),
       result.skipped > 0 ? fmt::format(", {} skipped", result.skipped) : std::string());
   text += fmt::format("map          {} keyframes, {} map points\n", result.map.keyframes,
                       result.map.map_points);

@@ -18,6 +18,7 @@
 #include "moslam/io/orbslam_settings.h"
 #include "moslam/slam/run_dataset.h"
 #include "moslam/synth/generator.h"
+#include "moslam/testing/sanitizer.h"
 #include "moslam/testing/shared_data.h"
 #include "moslam/vocab/vocabulary.h"
 
@@ -128,6 +129,7 @@ TEST_F(LoopRoom, RgbdClosesTheLoopAndCutsDrift) {
 }
 
 TEST_F(LoopRoom, MonocularClosesTheLoopWithSim3) {
+  MOSLAM_SKIP_UNDER_SANITIZER("two 600-frame monocular runs, 570 s under ASan");
   // The same walk seen by the colour camera alone: the map has an arbitrary, drifting scale, the
   // loop is a Sim(3) (measured scale 1.054 at the loop, here and with a vocabulary trained on seed
   // 2, docs/EVALUATION.md) and the essential graph has 7 degrees of freedom per keyframe.
@@ -150,6 +152,7 @@ TEST_F(LoopRoom, MonocularClosesTheLoopWithSim3) {
 // the map (ATE 0.02 -> 16.5 m on these 100 frames). The verification must refuse
 // them all, so that the run with loop closing on is the run with it off, pose for pose.
 TEST(AliasingStreet, FalseLoopsAreRefusedAndTheMapIsUntouched) {
+  MOSLAM_SKIP_UNDER_SANITIZER("two stereo runs of the street, 266 s under ASan");
   testing::TempDir dir;
   synth::GeneratorOptions generator;
   generator.preset = "street_repeat";

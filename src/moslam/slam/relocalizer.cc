@@ -1,5 +1,6 @@
 #include "moslam/slam/relocalizer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <unordered_set>
 
@@ -166,17 +167,30 @@ bool TryCandidate(const map::KeyFrame& keyframe, const feature::Frame& frame,
 
 RelocalizationResult Relocalize(const KeyFrameDatabase& database, const feature::Frame& frame,
                                 const KeyFrameBow& frame_bow, const optim::CameraModel& camera,
-                                const RelocalizerOptions& options) {
+                                const RelocalizerOptions& options,
+                                const std::optional<RelocalizationPrior>& prior) {
   options.Check();
+  MOSLAM_CHECK(!prior || prior->radius >= 0.0);
   RelocalizationResult result;
   const auto candidates = database.DetectRelocalizationCandidates(frame_bow.bow);
   result.num_candidates = static_cast<int>(candidates.size());
   for (const auto& kf : candidates) {
     if (kf->bad()) continue;
-    if (TryCandidate(*kf, frame, frame_bow, camera, options, &result)) {
-      result.keyframe = kf;
-      return result;
+    RelocalizationResult found;
+    if (!TryCandidate(*kf, frame, frame_bow, camera, options, &found)) continue;
+    if (prior) {
+      const double d = (found.T_cam_world.Inverse().translation() - prior->camera_center).norm();
+      if (d > prior->radius) {
+        ++result.refused_by_prior;
+        result.nearest_refused = std::min(result.nearest_refused, d);
+        continue;
+      }
     }
+    found.keyframe = kf;
+    found.num_candidates = result.num_candidates;
+    found.refused_by_prior = result.refused_by_prior;
+    found.nearest_refused = result.nearest_refused;
+    return found;
   }
   return result;
 }

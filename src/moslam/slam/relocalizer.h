@@ -11,12 +11,22 @@
 // where ORB-SLAM2 interleaves 5 RANSAC iterations per candidate; the result is the same pose
 // whenever one candidate is good, and the order makes runs repeatable.
 //
+// With a prior (a short loss, slam/tracker_recovery.cc) a candidate's pose must also put the
+// camera within the prior's radius of where the motion model predicts it; one that does not is
+// refused and the next candidate tried. On a street of identical houses the best-scoring
+// keyframe after a short loss is often a look-alike tens of metres away (docs/EVALUATION.md,
+// street_repeat_loop); a camera cannot get there in a second.
+//
 // The caller holds Map::mutex() (keyframes' points are read); the frame's BoW is computed
 // beforehand (KeyFrameDatabase::ComputeBow needs no lock).
 #pragma once
 
+#include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "moslam/feature/frame.h"
 #include "moslam/geometry/se3.h"
@@ -46,6 +56,12 @@ struct RelocalizerOptions {
   void Check() const;   // InputError naming the field
 };
 
+// Where the camera can be after a short loss.
+struct RelocalizationPrior {
+  Eigen::Vector3d camera_center = Eigen::Vector3d::Zero();  // predicted, world frame
+  double radius = 0.0;                                      // map units (metres but monocular)
+};
+
 struct RelocalizationResult {
   bool success = false;
   geometry::SE3 T_cam_world;
@@ -54,11 +70,16 @@ struct RelocalizationResult {
   int num_inliers = 0;
   int num_candidates = 0;                   // keyframes the database proposed
   std::shared_ptr<map::KeyFrame> keyframe;  // the candidate that gave the pose
+  // Candidates whose pose the prior refused, and the nearest of them (distance from the
+  // predicted camera centre; infinity when none).
+  int refused_by_prior = 0;
+  double nearest_refused = std::numeric_limits<double>::infinity();
 };
 
 RelocalizationResult Relocalize(const KeyFrameDatabase& database, const feature::Frame& frame,
                                 const KeyFrameBow& frame_bow, const optim::CameraModel& camera,
-                                const RelocalizerOptions& options = {});
+                                const RelocalizerOptions& options = {},
+                                const std::optional<RelocalizationPrior>& prior = std::nullopt);
 
 // ORB-SLAM2's SearchByProjection(Frame, KeyFrame, already found, th, ORBdist): projects the
 // keyframe's points that are not in `points` yet with `T_cam_world`, and matches each to the

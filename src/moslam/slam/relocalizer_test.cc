@@ -67,6 +67,35 @@ TEST(Relocalizer, FindsThePoseOfAFrameBetweenKeyFrames) {
   }
 }
 
+// A short loss (slam/tracker_recovery.cc): the prior says where the camera can be. The true pose
+// (0.25 m along x) is kept when the prediction is 0.3 m off and the radius 0.5 m, and refused
+// when the prediction is 5 m away: the one place that matches is then no answer.
+TEST(Relocalizer, APriorKeepsANearPoseAndRefusesAFarOne) {
+  Fixture fx;
+  map::Map scratch;
+  const geometry::SE3 truth = CameraAt(0.25);
+  const feature::Frame frame = ObserveScene(&scratch, fx.scene, truth)->frame;
+  const Eigen::Vector3d center = truth.Inverse().translation();
+  std::lock_guard<std::mutex> lock(fx.map.mutex());
+  const KeyFrameBow bow = fx.db->ComputeBow(frame.descriptors);
+
+  RelocalizationPrior near;
+  near.camera_center = center + Eigen::Vector3d(0.3, 0.0, 0.0);
+  near.radius = 0.5;
+  const RelocalizationResult kept = Relocalize(*fx.db, frame, bow, Model(), {}, near);
+  ASSERT_TRUE(kept.success);
+  EXPECT_EQ(kept.refused_by_prior, 0);
+  EXPECT_LT((kept.T_cam_world.translation() - truth.translation()).norm(), 1e-3);
+
+  RelocalizationPrior far = near;
+  far.camera_center = center + Eigen::Vector3d(0.0, 0.0, 5.0);
+  const RelocalizationResult refused = Relocalize(*fx.db, frame, bow, Model(), {}, far);
+  EXPECT_FALSE(refused.success);
+  EXPECT_EQ(refused.keyframe, nullptr);
+  EXPECT_GE(refused.refused_by_prior, 1);
+  EXPECT_NEAR(refused.nearest_refused, 5.0, 1e-2);
+}
+
 TEST(Relocalizer, AnUnknownPlaceGivesNoPose) {
   Fixture fx;
   map::Map scratch;

@@ -165,6 +165,7 @@ class System::Impl : public KeyFrameSink {
     t.initializer.parallel = !o.deterministic;  // same result either way (fixed seed)
     t.close_depth = o.settings.CloseDepthMetres();
     t.max_frames_between_keyframes = std::max(1, static_cast<int>(o.settings.fps));
+    if (!o.short_loss_recovery) t.recovery_window = 0.0;
     return t;
   }
 
@@ -197,6 +198,8 @@ class System::Impl : public KeyFrameSink {
     report.new_keyframe = outcome.new_keyframe;
     report.relocalized = outcome.relocalized;
     if (outcome.relocalized) ++relocalizations_;
+    report.recovered = outcome.recovered;
+    if (outcome.recovered) ++recoveries_;
     report.times.track_ms = outcome.track_ms;
     report.times.local_map_ms = outcome.local_map_ms;
     report.times.keyframe_ms = outcome.keyframe_ms;
@@ -267,6 +270,7 @@ class System::Impl : public KeyFrameSink {
     }
     summary.lost_frames = lost_frames_;
     summary.relocalizations = relocalizations_;
+    summary.recoveries = recoveries_;
     if (loop_closer_) {
       const LoopCloserStats loops = loop_closer_->Stats();
       summary.loops_closed = loops.loops_closed;
@@ -348,6 +352,7 @@ class System::Impl : public KeyFrameSink {
   std::thread loop_thread_;
   int lost_frames_ = 0;
   int relocalizations_ = 0;
+  int recoveries_ = 0;
   int frame_index_ = 0;
   int initialized_frame_ = -1;
 };

@@ -63,6 +63,11 @@ struct SystemOptions {
   // bound, depths, neighbours, spread); off closes every loop ORB-SLAM2's tests accept (moslam
   // run --no-loop-verification).
   bool loop_verification = true;
+  // Short-loss recovery (TrackerOptions::recovery_window, slam/tracker_recovery.cc): for 2 s
+  // after the last tracked frame a lost frame is searched at the constant-velocity prediction and
+  // a relocalization must land near it. Off: ORB-SLAM2's relocalization, which takes any place
+  // that matches (moslam run --no-short-loss-recovery).
+  bool short_loss_recovery = true;
   void Check() const;  // InputError naming the field
 };
 
@@ -96,6 +101,7 @@ struct FrameReport {
   int num_inliers = 0;   // map points tracked after local-map pose optimization
   bool new_keyframe = false;
   bool relocalized = false;  // the pose came from relocalization after tracking was lost
+  bool recovered = false;    // lost before, tracked again from the predicted pose (short loss)
   StageTimes times;
   std::optional<geometry::SE3> T_world_cam;  // when tracking is ok (or just initialized)
 };
@@ -107,6 +113,7 @@ struct MapSummary {
   int map_points = 0;
   int lost_frames = 0;
   int relocalizations = 0;         // frames relocalized (FrameReport::relocalized)
+  int recoveries = 0;              // frames recovered after a short loss (FrameReport::recovered)
   int loops_closed = 0;            // loop corrections (LoopCloserStats)
   int loops_rejected = 0;          // loops found but refused by the verification
   int global_ba_merged = 0;        // full bundle adjustments after a loop, written back

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "moslam/slam/run_dataset.h"
+#include "moslam/testing/sanitizer.h"
 #include "moslam/testing/shared_data.h"
 
 namespace moslam::slam {
@@ -16,6 +17,7 @@ constexpr double kMaxKeyFrameAteRmse = 0.35;
 constexpr int kMaxInitializationFrame = 20;
 
 TEST(SystemKittiMono, Kitti07First160FramesInitializeAndTrack) {
+  MOSLAM_SKIP_UNDER_SANITIZER("160 monocular KITTI frames, 340 s under ASan");
   MOSLAM_SHARED_OR_SKIP(folder, "data/kitti/07_000000-000159");
   const DatasetRun run = RunDataset(folder, "configs/KITTI04-12_mono.yaml", /*deterministic=*/true);
   ASSERT_EQ(run.reports.size(), 160u);

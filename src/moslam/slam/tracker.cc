@@ -9,6 +9,9 @@
 #include <set>
 #include <utility>
 
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
 #include "moslam/feature/matcher.h"
 #include "moslam/slam/frame_pose.h"
 #include "moslam/slam/relocalizer.h"
@@ -47,6 +50,7 @@ Tracker::Tracker(map::Map* map, const camera::PinholeCamera& camera, double bf,
       options_(options),
       sink_(sink) {
   MOSLAM_CHECK(map_ != nullptr && sink_ != nullptr);
+  options_.Check();
 }
 
 TrackOutcome Tracker::Track(feature::Frame frame) {
@@ -106,6 +110,17 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
       ok = out.num_matches >= kMinTrackingMatches;
       if (!ok) out.reason = "too few matches with the motion model and the reference keyframe";
     }
+    // Lost since an earlier frame, but not long ago: the last tracked frame's points where the
+    // camera should be now, before the database is asked.
+    if (!ok && relocalize_only) {
+      if (const auto predicted = RecoveryPrediction()) {
+        // Twice the motion model's radii: the prediction spans several frames.
+        out.num_matches = TrackFromPrediction(*predicted, 2.0f);
+        ok = out.num_matches >= kMinTrackingMatches;
+        out.recovered = ok;
+        if (ok) frames_since_relocalization_ = 0;  // local map: the stricter count, as after one
+      }
+    }
     if (!ok && database_) {
       ok = Relocalize(&out);
       if (!ok)
@@ -129,6 +144,7 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
   if (!ok) {
     out.status = TrackStatus::kLost;
     out.relocalized = false;
+    out.recovered = false;
     RecordPose(false);
     last_ok_ = false;
     have_velocity_ = false;
@@ -136,8 +152,15 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
   }
   velocity_ = current_.T_cam_world * last_.T_cam_world.Inverse();
   // After a relocalization the last frame is a lost one: no motion model until the next frame
-  // (ORB-SLAM2 tracks the reference keyframe up to mnLastRelocFrameId + 1).
-  have_velocity_ = !out.relocalized;
+  // (ORB-SLAM2 tracks the reference keyframe up to mnLastRelocFrameId + 1). After a recovery
+  // the velocity spans the lost frames: the next frame tracks the reference keyframe too.
+  have_velocity_ = !out.relocalized && !out.recovered;
+  const double dt = current_.frame.timestamp - last_.frame.timestamp;
+  if (have_velocity_ && dt > 0.0) {
+    recovery_motion_ = velocity_;
+    recovery_dt_ = dt;
+    have_recovery_motion_ = true;
+  }
 
   t0 = Clock::now();
   std::shared_ptr<map::KeyFrame> keyframe;
@@ -245,13 +268,16 @@ int Tracker::SearchByProjection(const std::vector<std::shared_ptr<map::MapPoint>
   return n;
 }
 
-int Tracker::TrackWithMotionModel() {
-  current_.T_cam_world = velocity_ * last_.T_cam_world;
+int Tracker::TrackWithMotionModel() { return TrackFromPrediction(velocity_ * last_.T_cam_world); }
+
+int Tracker::TrackFromPrediction(const geometry::SE3& predicted, float radius_scale) {
+  current_.T_cam_world = predicted;
   std::vector<std::shared_ptr<map::MapPoint>> candidates;
   for (const auto& p : last_.points) {
     if (p && !p->bad) candidates.push_back(p);
   }
-  const float radius = options_.monocular ? kMonoMotionModelRadius : kMotionModelRadius;
+  const float radius =
+      radius_scale * (options_.monocular ? kMonoMotionModelRadius : kMotionModelRadius);
   int n = SearchByProjection(candidates, radius, true);
   if (n < kMinMotionModelMatches) {
     std::fill(current_.points.begin(), current_.points.end(), nullptr);
@@ -297,7 +323,17 @@ bool Tracker::Relocalize(TrackOutcome* out) {
   const KeyFrameBow bow = database_->ComputeBow(current_.frame.descriptors);
   RelocalizerOptions options;
   options.num_threads = options_.num_threads;
-  const RelocalizationResult r = slam::Relocalize(*database_, current_.frame, bow, model_, options);
+  const std::optional<RelocalizationPrior> prior = RecoveryPrior();
+  const RelocalizationResult r =
+      slam::Relocalize(*database_, current_.frame, bow, model_, options, prior);
+  if (r.refused_by_prior > 0) {
+    const std::string refused = fmt::format(
+        "relocalization refused {} pose(s) that a short loss cannot explain, the nearest {:.2f} "
+        "from the predicted camera centre (allowed {:.2f})",
+        r.refused_by_prior, r.nearest_refused, prior->radius);
+    spdlog::info("frame at {:.3f} s: {}", current_.frame.timestamp, refused);
+    if (!r.success) out->reason += (out->reason.empty() ? "" : "; ") + refused;
+  }
   if (!r.success) return false;
   current_.T_cam_world = r.T_cam_world;
   current_.points = r.points;

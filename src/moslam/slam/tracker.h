@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,7 @@
 #include "moslam/optim/observation.h"
 #include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/mono_initializer.h"
+#include "moslam/slam/relocalizer.h"
 
 namespace moslam::slam {
 
@@ -54,6 +56,17 @@ struct TrackerOptions {
   MonoInitializerOptions initializer;  // monocular only
   int min_init_features = 100;  // monocular: keypoints of an initialization frame (ORB-SLAM2)
   int min_init_matches = 100;   // monocular: matches with the reference (ORB-SLAM2: 100)
+  // A short loss (ORB-SLAM3's "recently lost" state, Campos et al. 2021, which predicts with the
+  // IMU; here the constant-velocity model): for recovery_window seconds after the last tracked
+  // frame, a lost frame first searches that frame's points again at the pose the last velocity
+  // predicts (twice the motion model's radius), and a relocalization must put the camera within
+  // recovery_depth_fraction x the reference keyframe's median depth + recovery_speed_fraction x
+  // the distance that velocity covers, of the predicted centre (slam/tracker_recovery.cc). After
+  // the window any relocalization is taken (a kidnapped camera). recovery_window 0: ORB-SLAM2.
+  double recovery_window = 2.0;           // seconds
+  double recovery_depth_fraction = 0.25;  // of the median scene depth (scale-free, monocular too)
+  double recovery_speed_fraction = 0.5;   // of the distance predicted since the last frame
+  void Check() const;                     // InputError naming the field
 };
 
 enum class TrackStatus { kNotInitialized, kInitialized, kOk, kLost };
@@ -65,6 +78,7 @@ struct TrackOutcome {
   int num_inliers = 0;
   bool new_keyframe = false;
   bool relocalized = false;  // the pose came from relocalization (slam/relocalizer.h)
+  bool recovered = false;    // lost before, tracked again from the predicted pose
   geometry::SE3 T_cam_world;
   double track_ms = 0.0, local_map_ms = 0.0, keyframe_ms = 0.0;
 };
@@ -112,6 +126,14 @@ class Tracker {
   int TrackWithMotionModel();
   int TrackReferenceKeyFrame();
   bool Relocalize(TrackOutcome* out);
+  // Short-loss recovery (tracker_recovery.cc): the predicted pose while recently lost, the
+  // prior it gives relocalization.
+  std::optional<geometry::SE3> RecoveryPrediction() const;
+  std::optional<RelocalizationPrior> RecoveryPrior() const;
+  // The last frame's points searched around `predicted` (radius_scale x the motion model's
+  // radius, then twice that), and the pose optimized; returns the inliers. The motion model is
+  // this with the constant-velocity prediction.
+  int TrackFromPrediction(const geometry::SE3& predicted, float radius_scale = 1.0f);
   int OptimizeCurrentPose();
   int DiscardOutliers();
   int TrackLocalMap();
@@ -136,6 +158,11 @@ class Tracker {
   bool last_ok_ = false;
   bool have_velocity_ = false;
   geometry::SE3 velocity_;  // T_cam_world(k) * T_world_cam(k-1)
+  // The last frame-to-frame velocity (not one spanning a loss) and its interval in seconds,
+  // for the short-loss prediction (tracker_recovery.cc); kept through relocalized frames.
+  geometry::SE3 recovery_motion_;
+  double recovery_dt_ = 0.0;
+  bool have_recovery_motion_ = false;
   std::shared_ptr<map::KeyFrame> reference_;
   std::shared_ptr<map::KeyFrame> last_keyframe_;
   uint64_t frames_since_keyframe_ = 0;
