@@ -13,6 +13,7 @@
 #include "moslam/io/dataset.h"
 #include "moslam/io/orbslam_settings.h"
 #include "moslam/net/blas_core.h"
+#include "moslam/runner/mask_damage.h"
 #include "moslam/runner/mask_source.h"
 #include "moslam/runner/outputs.h"
 #include "moslam/runner/run_loop.h"
@@ -50,6 +51,15 @@ struct RunArgs {
   bool no_loop_verification = false;
   bool no_short_loss_recovery = false;
   int mapping_nice = 10;
+  // Movable objects beyond the per-frame mask (slam::SystemOptions).
+  bool no_movable_evidence = false;
+  bool free_space_check = false;
+  bool no_moving_check = false;
+  int mask_margin = slam::SystemOptions{}.mask_margin_px;
+  int mask_propagation = slam::SystemOptions{}.mask_propagation_frames;
+  int mask_completion = slam::SystemOptions{}.mask_completion_px;
+  int segment_every = 1;
+  std::string mask_damage;
 };
 
 // The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
@@ -99,6 +109,12 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.loop_verification = !args.no_loop_verification;
   options.short_loss_recovery = !args.no_short_loss_recovery;
   options.background_nice = args.mapping_nice;
+  options.movable_evidence = !args.no_movable_evidence;
+  options.free_space_evidence = args.free_space_check;
+  options.moving_keypoint_check = !args.no_moving_check;
+  options.mask_margin_px = args.mask_margin;
+  options.mask_propagation_frames = args.mask_propagation;
+  options.mask_completion_px = args.mask_completion;
   options.Check();
   return std::make_unique<SystemTracker>(options);
 #else
@@ -159,14 +175,19 @@ void Run(const RunArgs& args) {
   }
   if (sequence.empty()) ThrowInFile(path, "data set has no frames");
 
-  const std::unique_ptr<runner::MaskSource> masks =
+  std::unique_ptr<runner::MaskSource> masks =
       runner::MakeMaskSource(MakeMaskOptions(args), sequence);
+  if (!args.mask_damage.empty()) {
+    masks =
+        runner::MakeDamagedMaskSource(std::move(masks), runner::ParseMaskDamage(args.mask_damage));
+  }
   runner::RunOptions options;
   if (!args.frames.empty()) options.frames = runner::ParseFrameRange(args.frames);
   if (!args.skip_frames.empty()) {
     options.skip = runner::ParseFrameRange(args.skip_frames, "--skip-frames");
   }
   options.realtime = args.realtime;
+  options.segment_every = args.segment_every;
   options.progress = !args.quiet;
   options.queue_capacity = args.queue;
   // RGB-D colour images go to the tracker in colour, converted to grey by Camera.RGB as ORB-SLAM2
@@ -279,6 +300,42 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--no-short-loss-recovery", args->no_short_loss_recovery,
                     "Relocalize a frame lost a moment ago wherever it matches, as ORB-SLAM2, "
                     "instead of near where the last velocity puts it (comparisons)");
+  command->add_flag("--no-movable-evidence", args->no_movable_evidence,
+                    "Keep map points that later masks show to lie on a movable object (by "
+                    "default they are erased after 2 such frames; ablations)");
+  command->add_flag("--free-space-check", args->free_space_check,
+                    "RGB-D: erase map points where 3 frames' depth shows free space in front of "
+                    "the surface they should be on (off by default: it costs static points at "
+                    "depth edges)");
+  command->add_flag("--no-moving-check", args->no_moving_check,
+                    "Let keyframe keypoints seen moving against 3 frames back seed map points "
+                    "(ablations)");
+  command
+      ->add_option("--mask-margin", args->mask_margin,
+                   "No new map point within this many pixels of a mask (0: off)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      ->add_option("--mask-propagation", args->mask_propagation,
+                   "Carry each mask into this many following frames with the predicted motion "
+                   "(RGB-D with the depth under it; 0: off)")
+      ->check(CLI::Range(0, 250))
+      ->capture_default_str();
+  command
+      ->add_option("--mask-completion", args->mask_completion,
+                   "RGB-D: grow masks over the depth-connected surface they cover, up to this "
+                   "many pixels (0: off)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      ->add_option("--segment-every", args->segment_every,
+                   "Run the mask source on every K-th frame only; the others get the carried "
+                   "mask (needs --mask-propagation > 0)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  command->add_option("--mask-damage", args->mask_damage,
+                      "Damage the masks for ablations: miss=P,border=PX,erode=PX,holes=P,"
+                      "radius=PX,seed=N (P a share 0..1; any subset)");
   command
       ->add_option("--mapping-nice", args->mapping_nice,
                    "Nice increment (0-19) of the local-mapping and loop-closing threads, so "

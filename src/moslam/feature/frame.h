@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -35,6 +36,18 @@ struct Frame {
   // -1 when unknown (monocular, no stereo match, invalid depth).
   std::vector<float> u_right;
   std::vector<float> depth;
+  // Per keypoint: 1 when it lies within a few pixels of the frame's movable-object mask
+  // (KeypointsNearMask in feature/movable_mask.h); such keypoints track existing map points but
+  // seed no new ones. Empty: no mask (none is near).
+  std::vector<uint8_t> near_movable;
+  // Per keypoint: 1 when tracking saw it move against an earlier frame (slam/moving_keypoints.h;
+  // set on keyframes). Empty: not judged.
+  std::vector<uint8_t> moving;
+  bool NearMovable(size_t i) const { return i < near_movable.size() && near_movable[i] != 0; }
+  // Keypoints that may track existing map points but seed no new one.
+  bool SeedsNoPoint(size_t i) const {
+    return NearMovable(i) || (i < moving.size() && moving[i] != 0);
+  }
   // The extractor's pyramid: scale_factors[l] = scale_factor^l, level_sigma2[l] its square.
   std::vector<float> scale_factors;
   std::vector<float> inv_scale_factors;

@@ -38,6 +38,11 @@ class MapPoint {
   // Tracking statistics for culling (ORB-SLAM2's mnVisible / mnFound).
   int visible = 1;
   int found = 1;
+  // Frames whose movable-object mask covered the point where it projects, and RGB-D frames
+  // whose depth showed free space in front of where it should be seen (slam/movable_points.h);
+  // past a threshold the point is erased.
+  int movable_evidence = 0;
+  int free_space_evidence = 0;
 
   struct Observation {
     std::weak_ptr<KeyFrame> keyframe;

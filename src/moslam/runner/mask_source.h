@@ -73,6 +73,7 @@ struct FrameMask {
   std::string path;         // the file it came from; empty when none
   double network_ms = 0.0;  // model sources: pre-processing and inference
   double crf_ms = 0.0;      // model sources: the CRF
+  int frame_index = 0;      // set by sources that need it between Predict() and Refine()
   // Pipelined model sources: the network's output between Predict() and Refine() (mask empty).
   std::shared_ptr<semantic::Prediction> pending;
 };

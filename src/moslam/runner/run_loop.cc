@@ -63,6 +63,7 @@ FrameRange ParseFrameRange(const std::string& text, const std::string& option) {
 void RunOptions::Check() const {
   if (queue_capacity == 0) ThrowInput("run.queue_capacity: must be > 0");
   if (!(depth_factor > 0.0)) ThrowInput("run.depth_factor: must be > 0, got {}", depth_factor);
+  if (segment_every < 1) ThrowInput("--segment-every: must be >= 1, got {}", segment_every);
 }
 
 LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options) {
@@ -140,15 +141,22 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource
         options.queue_capacity);
     // A network source gets two stages, network then refinement (the CRF), so that on two
     // cores the CRF of frame k runs beside the network of frame k+1.
+    // --segment-every: the frames the source runs on.
+    const auto due = [first = result.first, every = options.segment_every](const LoadedFrame& f) {
+      return (static_cast<size_t>(f.index) - first) % static_cast<size_t>(every) == 0;
+    };
     std::optional<SegmentationStage> network_stage;
     if (masks.Pipelined()) {
       network_stage.emplace([&loader] { return loader.Next(); }, [&loader] { loader.Stop(); },
-                            [&masks](LoadedFrame& f) { PredictFrame(masks, &f); },
+                            [&masks, &due](LoadedFrame& f) {
+                              if (due(f)) PredictFrame(masks, &f);
+                            },
                             options.queue_capacity);
     }
     SegmentationStage stage([&] { return network_stage ? network_stage->Next() : loader.Next(); },
                             [&] { network_stage ? network_stage->Stop() : loader.Stop(); },
-                            [&masks, pipelined = masks.Pipelined()](LoadedFrame& f) {
+                            [&masks, &due, pipelined = masks.Pipelined()](LoadedFrame& f) {
+                              if (!due(f)) return;
                               pipelined ? RefineFrame(masks, &f) : SegmentFrame(masks, &f);
                             },
                             options.queue_capacity);
@@ -171,6 +179,7 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource
       record.network_ms = frame->network_ms;
       record.crf_ms = frame->crf_ms;
       record.mask_fraction = frame->mask_fraction;
+      record.segmented = due(*frame);
       record.report = tracker.Track(frame->input);
       spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,
                     record.timestamp, StateName(record.report.state), record.report.num_features,

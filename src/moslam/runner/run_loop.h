@@ -39,7 +39,11 @@ struct RunOptions {
                               // tracking (> 0; each of the two queues holds this many)
   io::ColourMode colour = io::ColourMode::kGrey;  // how the left image is loaded
   double depth_factor = io::kTumDepthFactor;      // raw depth units per metre (RGB-D)
-  void Check() const;                             // InputError naming the field
+  // The mask source runs on every k-th frame of the range only (from its first frame); the
+  // others reach the tracker without a mask, which carries the last one into them
+  // (slam::SystemOptions::mask_propagation_frames; `moslam run --segment-every K`).
+  int segment_every = 1;
+  void Check() const;  // InputError naming the field
 };
 
 // One frame as frames.csv records it.
@@ -51,6 +55,7 @@ struct FrameRecord {
   double network_ms = 0.0;  // of mask_ms: the network
   double crf_ms = 0.0;      // of mask_ms: the CRF
   double mask_fraction = 0.0;
+  bool segmented = true;  // the mask source ran on this frame (RunOptions::segment_every)
 };
 
 struct RunResult {

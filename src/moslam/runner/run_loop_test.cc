@@ -1,6 +1,7 @@
 // The run loop with a fake tracker on tiny TUM- and KITTI-layout sequences: output files and
 // their formats, frame ranges, and clean stops at the end and on errors in either thread.
 #include "moslam/runner/run_loop.h"
+#include "moslam/runner/mask_damage.h"
 
 #include <filesystem>
 #include <fstream>
@@ -12,6 +13,7 @@
 
 #include "moslam/eval/trajectory_io.h"
 #include "moslam/io/dataset.h"
+#include "moslam/runner/mask_damage.h"
 #include "moslam/runner/outputs.h"
 #include "moslam/runner/test_sequences.h"
 #include "moslam/testing/error_of.h"
@@ -85,7 +87,7 @@ TEST(RunLoopTest, TumRunWritesEveryOutputInItsFormat) {
   const auto csv = Lines((dir / "frames.csv").string());
   ASSERT_EQ(csv.size(), 7u);
   EXPECT_EQ(csv[0], kFramesCsvHeader);
-  EXPECT_EQ(SplitFields(csv[0], true).size(), 18u);
+  EXPECT_EQ(SplitFields(csv[0], true).size(), 22u);
   EXPECT_THAT(csv[1], ::testing::StartsWith("0," + test::Stamp(0) + ",ok,,100,80,60,1,1.000,"));
   EXPECT_THAT(csv[4], HasSubstr(",lost,\"too few matches, said the fake\",103,"));
   // Summary with the ATE against groundtruth.txt: the fake reports the true poses.
@@ -183,6 +185,45 @@ TEST(RunLoopTest, SkippedFramesNeverReachTheTracker) {
   EXPECT_EQ(result.skipped, 2u);
   EXPECT_THAT(ErrorOf([] { ParseFrameRange("4:2", "--skip-frames"); }),
               HasSubstr("--skip-frames: the range '4:2' is empty"));
+}
+
+// A mask over the whole image on every frame it is asked for.
+class FullMasks : public MaskSource {
+ public:
+  FrameMask MaskFor(const io::FrameEntry&, const cv::Size& size) const override {
+    FrameMask mask;
+    mask.mask = cv::Mat(size, CV_8UC1, cv::Scalar(255));
+    mask.fraction = 1.0;
+    return mask;
+  }
+  std::string Describe() const override { return "full"; }
+};
+
+TEST(RunLoopTest, SegmentEveryKRunsTheSourceOnEveryKthFrameOnly) {
+  testing::TempDir data;
+  test::MakeKitti(data, 7);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  FullMasks masks;
+  FakeTracker tracker;
+  RunOptions options = Quiet();
+  options.frames = ParseFrameRange("1:");
+  options.segment_every = 3;
+  const RunResult result = RunSequence(seq, tracker, masks, options);
+  ASSERT_EQ(tracker.masks.size(), 6u);
+  for (size_t k = 0; k < 6; ++k) {
+    // Frames 1 and 4: counted from the range's first frame.
+    EXPECT_EQ(tracker.masks[k].empty(), k % 3 != 0) << "frame " << k + 1;
+    EXPECT_EQ(result.frames[k].segmented, k % 3 == 0);
+  }
+  // Damage on top: every frame missed.
+  const auto damaged =
+      MakeDamagedMaskSource(std::make_unique<FullMasks>(), ParseMaskDamage("miss=1"));
+  FakeTracker second;
+  options.segment_every = 1;
+  RunSequence(seq, second, *damaged, options);
+  for (const cv::Mat& mask : second.masks) EXPECT_EQ(cv::countNonZero(mask), 0);
+  options.segment_every = 0;
+  EXPECT_THROW(RunSequence(seq, tracker, masks, options), InputError);
 }
 
 TEST(RunLoopTest, FrameRangeSelectsAndIsChecked) {

@@ -191,9 +191,14 @@ std::vector<std::pair<size_t, size_t>> SearchForTriangulation(
 }
 
 namespace {
+// Keypoints that may seed a new point: no (good) point yet, not at a movable mask's border
+// (feature::Frame::near_movable: where a network is least sure of a body's extent) and not seen
+// moving (feature::Frame::moving).
 std::vector<bool> FreeSlots(const map::KeyFrame& kf) {
   std::vector<bool> free(kf.points.size());
-  for (size_t i = 0; i < free.size(); ++i) free[i] = !kf.points[i] || kf.points[i]->bad;
+  for (size_t i = 0; i < free.size(); ++i) {
+    free[i] = (!kf.points[i] || kf.points[i]->bad) && !kf.frame.SeedsNoPoint(i);
+  }
   return free;
 }
 }  // namespace

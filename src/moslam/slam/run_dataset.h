@@ -59,12 +59,15 @@ inline double ThreadCpuMs() {
 // the SystemOptions before the run (experiments: local BA off, ...). `realtime`: frames are
 // handed over no faster than their timestamps, as a camera would (ORB-SLAM2's examples wait the
 // same way), so threaded local mapping gets the time a live run gives it; without it frames come
-// as fast as tracking takes them, which starves mapping on a loaded machine.
+// as fast as tracking takes them, which starves mapping on a loaded machine. `edit_mask` (may be
+// empty) changes each frame's mask before tracking (frame index, mask): damage for the tests of
+// imperfect masks.
 inline DatasetRun RunDataset(const std::string& folder, const std::string& settings_path,
                              bool deterministic, int max_frames = 0,
                              const std::string& mask_folder = "",
                              const std::function<void(SystemOptions*)>& adjust = {},
-                             bool realtime = false) {
+                             bool realtime = false,
+                             const std::function<cv::Mat(size_t, const cv::Mat&)>& edit_mask = {}) {
   const io::Sequence sequence = io::ReadDataset(folder);
   SystemOptions options;
   options.sensor = sequence.sensor;
@@ -93,6 +96,7 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
       input.right = images.right;
       input.depth = images.depth;
       if (!mask_folder.empty()) input.mask = io::LoadGreyImage(MaskPath(entry, mask_folder));
+      if (edit_mask) input.mask = edit_mask(i, input.mask);
       const double cpu0 = ThreadCpuMs();
       run.reports.push_back(system.Track(input));
       cpu_ms.push_back(ThreadCpuMs() - cpu0);

@@ -19,11 +19,13 @@
 #include "moslam/camera/stereo_camera.h"
 #include "moslam/eval/statistics.h"
 #include "moslam/feature/frame.h"
+#include "moslam/feature/movable_mask.h"
 #include "moslam/feature/orb_extractor.h"
 #include "moslam/map/map.h"
 #include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/local_mapper.h"
 #include "moslam/slam/loop_closer.h"
+#include "moslam/slam/mask_propagation.h"
 #include "moslam/slam/tracker.h"
 #include "moslam/util/bounded_queue.h"
 #include "moslam/util/error.h"
@@ -52,6 +54,11 @@ void SystemOptions::Check() const {
   }
   if (keyframe_queue_capacity < 1) {
     throw InputError("SystemOptions.keyframe_queue_capacity must be >= 1");
+  }
+  if (mask_margin_px < 0 || mask_propagation_frames < 0 || mask_completion_px < 0) {
+    throw InputError(
+        "SystemOptions.mask_margin_px, mask_propagation_frames and mask_completion_px must be "
+        ">= 0");
   }
   if (background_nice < 0 || background_nice > 19) {
     throw InputError("SystemOptions.background_nice must be in 0..19 (got " +
@@ -126,6 +133,11 @@ class System::Impl : public KeyFrameSink {
                                                     keyframe_database_.get(), LoopOptions(options));
       }
     }
+    if (options_.mask_propagation_frames > 0) {
+      MaskPropagationOptions propagation;
+      propagation.max_age = options_.mask_propagation_frames;
+      propagator_ = std::make_unique<MaskPropagator>(camera_, propagation);
+    }
     if (!options_.deterministic) mapping_thread_ = std::thread([this] { MappingLoop(); });
     if (!options_.deterministic && loop_closer_) {
       loop_thread_ = std::thread([this] { LoopClosingLoop(); });
@@ -166,6 +178,12 @@ class System::Impl : public KeyFrameSink {
     t.close_depth = o.settings.CloseDepthMetres();
     t.max_frames_between_keyframes = std::max(1, static_cast<int>(o.settings.fps));
     if (!o.short_loss_recovery) t.recovery_window = 0.0;
+    t.movable.mask_evidence = o.movable_evidence;
+    t.movable.free_space_evidence = o.free_space_evidence;
+    // RGB-D only: stereo depth of far points is too uncertain for its depth test (on KITTI 06
+    // it flagged static points and cost a second relocalization in slam/relocalization), and
+    // monocular keypoints have none.
+    t.moving.enabled = o.moving_keypoint_check && o.sensor == io::SensorType::kRgbD;
     return t;
   }
 
@@ -186,10 +204,24 @@ class System::Impl : public KeyFrameSink {
   FrameReport Track(const FrameInput& input) {
     FrameReport report;
     const auto t0 = std::chrono::steady_clock::now();
-    feature::Frame frame = MakeFrame(input);
+    const cv::Mat mask = MaskFor(input);
+    report.times.mask_ms = MsSince(t0);
+    feature::Frame frame = MakeFrame(input, mask);
+    if (options_.mask_margin_px > 0 && !mask.empty()) {
+      const auto t1 = std::chrono::steady_clock::now();
+      frame.near_movable =
+          feature::KeypointsNearMask(frame.keypoints, mask, options_.mask_margin_px);
+      report.times.mask_ms += MsSince(t1);
+    }
     report.num_features = static_cast<int>(frame.size());
     report.times.extract_ms = MsSince(t0);
-    const TrackOutcome outcome = tracker_.Track(std::move(frame));
+    // Map points are judged by the network's own mask only: carried and completed pixels are
+    // good enough to keep the extractor off a body, but they also cover the static surface a
+    // body has just left or stands on, at the same depth, and would erase it.
+    const TrackOutcome outcome = tracker_.Track(std::move(frame), {input.mask, input.depth});
+    FollowPose(outcome, input);
+    report.movable_points_erased = outcome.movable.erased;
+    movable_points_erased_ += outcome.movable.erased;
     if (outcome.status == TrackStatus::kInitialized) initialized_frame_ = frame_index_;
     ++frame_index_;
     report.reason = outcome.reason;
@@ -271,6 +303,7 @@ class System::Impl : public KeyFrameSink {
     summary.lost_frames = lost_frames_;
     summary.relocalizations = relocalizations_;
     summary.recoveries = recoveries_;
+    summary.movable_points_erased = movable_points_erased_;
     if (loop_closer_) {
       const LoopCloserStats loops = loop_closer_->Stats();
       summary.loops_closed = loops.loops_closed;
@@ -287,22 +320,58 @@ class System::Impl : public KeyFrameSink {
   }
 
  private:
-  feature::Frame MakeFrame(const FrameInput& input) {
+  // The frame's movable mask: the input's, united with the masks carried from the last frames,
+  // and (RGB-D) grown over the depth-connected surface it covers.
+  cv::Mat MaskFor(const FrameInput& input) {
+    if (!input.mask.empty() &&
+        (input.mask.type() != CV_8UC1 || input.mask.size() != input.image.size())) {
+      throw InputError("FrameInput.mask: expected CV_8UC1 of the image's size " +
+                       std::to_string(input.image.cols) + "x" + std::to_string(input.image.rows) +
+                       ", got " + std::to_string(input.mask.cols) + "x" +
+                       std::to_string(input.mask.rows) + " with " +
+                       std::to_string(input.mask.channels()) + " channel(s)");
+    }
+    cv::Mat mask = input.mask;
+    if (propagator_) mask = propagator_->MaskFor(input.mask, input.image.size(), velocity_);
+    if (options_.mask_completion_px > 0 && !input.depth.empty() && !mask.empty() &&
+        cv::countNonZero(mask) > 0) {
+      feature::MaskCompletionOptions completion;
+      completion.max_grow_px = options_.mask_completion_px;
+      mask = feature::CompleteMaskByDepth(mask, input.depth, completion);
+    }
+    return mask;
+  }
+
+  // The motion the next frame's mask is carried with: the last frame-to-frame velocity.
+  void FollowPose(const TrackOutcome& outcome, const FrameInput& input) {
+    const bool ok =
+        outcome.status == TrackStatus::kOk || outcome.status == TrackStatus::kInitialized;
+    if (ok && last_T_cam_world_) {
+      velocity_ = outcome.T_cam_world * last_T_cam_world_->Inverse();
+    } else {
+      velocity_.reset();
+    }
+    last_T_cam_world_.reset();
+    if (ok) last_T_cam_world_ = outcome.T_cam_world;
+    if (propagator_) propagator_->Commit(input.depth);
+  }
+
+  feature::Frame MakeFrame(const FrameInput& input, const cv::Mat& mask) {
     const cv::Mat grey = ToGrey(input.image, options_.settings.rgb);
     if (options_.sensor == io::SensorType::kMonocular) {
       feature::OrbExtractor* extractor =
           tracker_.initialized() ? &left_extractor_ : &init_extractor_;
-      return feature::MakeMonocularFrame(input.timestamp, grey, input.mask, extractor, camera_);
+      return feature::MakeMonocularFrame(input.timestamp, grey, mask, extractor, camera_);
     }
     if (options_.sensor == io::SensorType::kStereo) {
       if (input.right.empty())
         throw InputError("FrameInput.right: stereo frame without right image");
       return feature::MakeStereoFrame(input.timestamp, grey,
-                                      ToGrey(input.right, options_.settings.rgb), input.mask,
+                                      ToGrey(input.right, options_.settings.rgb), mask,
                                       &left_extractor_, &right_extractor_, *stereo_camera_);
     }
     if (input.depth.empty()) throw InputError("FrameInput.depth: RGB-D frame without depth");
-    return feature::MakeRgbdFrame(input.timestamp, grey, input.depth, input.mask, &left_extractor_,
+    return feature::MakeRgbdFrame(input.timestamp, grey, input.depth, mask, &left_extractor_,
                                   camera_, options_.settings.bf);
   }
 
@@ -353,6 +422,11 @@ class System::Impl : public KeyFrameSink {
   int lost_frames_ = 0;
   int relocalizations_ = 0;
   int recoveries_ = 0;
+  int movable_points_erased_ = 0;
+  // Masks carried between frames (null when SystemOptions::mask_propagation_frames is 0), and
+  // the poses they are carried with.
+  std::unique_ptr<MaskPropagator> propagator_;
+  std::optional<geometry::SE3> last_T_cam_world_, velocity_;
   int frame_index_ = 0;
   int initialized_frame_ = -1;
 };

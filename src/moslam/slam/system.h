@@ -68,6 +68,25 @@ struct SystemOptions {
   // a relocalization must land near it. Off: ORB-SLAM2's relocalization, which takes any place
   // that matches (moslam run --no-short-loss-recovery).
   bool short_loss_recovery = true;
+  // Movable objects beyond the per-frame mask (issue 24; docs/EVALUATION.md measures each):
+  // map points seen inside later frames' masks are erased (slam/movable_points.h) ...
+  bool movable_evidence = true;
+  // ... and, RGB-D, those where the measured depth shows free space (no mask needed). Off by
+  // default: it also erases the many static points at depth edges, whose depth is the
+  // background's or the foreground's by chance, and with exact masks that cost 2-3x in ATE
+  // (docs/EVALUATION.md, "Imperfect masks");
+  bool free_space_evidence = false;
+  // RGB-D: keyframe keypoints seen moving against a frame 3 frames back seed no map point
+  // (slam/moving_keypoints.h; not for stereo, whose far depths are too uncertain for it);
+  bool moving_keypoint_check = true;
+  // no new map point within this many pixels of a mask (0: off);
+  int mask_margin_px = 4;
+  // masks carried into the next frames with the predicted motion (slam/mask_propagation.h),
+  // so a frame the network missed, or did not run on, still has one; 0 frames: off;
+  int mask_propagation_frames = 3;
+  // RGB-D: masks grown over the depth-connected surface they cover, up to this many pixels
+  // (feature::CompleteMaskByDepth); 0: off.
+  int mask_completion_px = 12;
   void Check() const;  // InputError naming the field
 };
 
@@ -90,6 +109,7 @@ struct StageTimes {
   double track_ms = 0.0;      // motion model / reference keyframe tracking
   double local_map_ms = 0.0;  // local map tracking incl. pose optimization
   double keyframe_ms = 0.0;   // keyframe decision and creation (and, deterministic, mapping)
+  double mask_ms = 0.0;       // mask propagation, completion and border flags (in extract_ms)
   double total_ms = 0.0;
 };
 
@@ -100,8 +120,9 @@ struct FrameReport {
   int num_matches = 0;   // matches from motion-model / reference-keyframe tracking
   int num_inliers = 0;   // map points tracked after local-map pose optimization
   bool new_keyframe = false;
-  bool relocalized = false;  // the pose came from relocalization after tracking was lost
-  bool recovered = false;    // lost before, tracked again from the predicted pose (short loss)
+  bool relocalized = false;       // the pose came from relocalization after tracking was lost
+  bool recovered = false;         // lost before, tracked again from the predicted pose (short loss)
+  int movable_points_erased = 0;  // map points this frame's mask or depth showed to be movable
   StageTimes times;
   std::optional<geometry::SE3> T_world_cam;  // when tracking is ok (or just initialized)
 };
@@ -114,6 +135,7 @@ struct MapSummary {
   int lost_frames = 0;
   int relocalizations = 0;         // frames relocalized (FrameReport::relocalized)
   int recoveries = 0;              // frames recovered after a short loss (FrameReport::recovered)
+  int movable_points_erased = 0;   // FrameReport::movable_points_erased, summed
   int loops_closed = 0;            // loop corrections (LoopCloserStats)
   int loops_rejected = 0;          // loops found but refused by the verification
   int global_ba_merged = 0;        // full bundle adjustments after a loop, written back

@@ -2,9 +2,11 @@
 // walking in front of a camera moving along x, y and z, exact ground truth. The people are masked
 // out with the sequence's moving-object masks, as the paper's segmentation would do.
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include "moslam/slam/run_dataset.h"
 #include "moslam/synth/generator.h"
+#include "moslam/testing/sanitizer.h"
 #include "moslam/testing/shared_data.h"
 
 namespace moslam::slam {
@@ -38,6 +40,55 @@ TEST(SystemSynthetic, RgbdWithMovingMasksTracksEveryFrameAndBeatsUnmasked) {
   ASSERT_EQ(unmasked.reports.size(), 60u);
   EXPECT_GT(unmasked.ate_rmse, 5.0 * run.ate_rmse);  // measured 18-65x, seeds 1-4
   std::printf("synthetic w_xyz 60 frames without masks: ATE RMSE %.4f m\n", unmasked.ate_rmse);
+}
+
+// Imperfect masks (issue 24): the generator's exact masks, but every third frame has none (a
+// network's missed frames) and the others lose 4 px all round and everything within 40 px of the
+// image's border (people entering and leaving). With the mechanisms of slam/movable_points.h,
+// mask_propagation.h and moving_keypoints.h the run stays within twice the exact masks' error.
+TEST(SystemSynthetic, DegradedMasksStayWithinTwiceTheExactMasksError) {
+  MOSLAM_SKIP_UNDER_SANITIZER(
+      "three deterministic 90-frame runs; the unit tests of each "
+      "mechanism run under the sanitizers");
+  const testing::TempDir dir;
+  synth::GeneratorOptions generator;
+  generator.preset = "w_xyz";
+  generator.seed = 4;
+  generator.out = dir.path();
+  generator.frames = 90;
+  generator.progress = false;
+  synth::GenerateSequence(generator);
+  const auto damage = [](size_t frame, const cv::Mat& mask) -> cv::Mat {
+    if (frame % 3 == 2) return cv::Mat::zeros(mask.size(), CV_8UC1);
+    cv::Mat out;
+    cv::erode(mask, out, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(9, 9)));
+    const int b = 40;
+    out.rowRange(0, b).setTo(0);
+    out.rowRange(out.rows - b, out.rows).setTo(0);
+    out.colRange(0, b).setTo(0);
+    out.colRange(out.cols - b, out.cols).setTo(0);
+    return out;
+  };
+  const std::string settings = dir.path() + "/settings.yaml";
+  const DatasetRun exact = RunDataset(dir.path(), settings, true, 0, "moving");
+  const DatasetRun degraded =
+      RunDataset(dir.path(), settings, true, 0, "moving", {}, false, damage);
+  const DatasetRun bare = RunDataset(
+      dir.path(), settings, true, 0, "moving",
+      [](SystemOptions* o) {
+        o->movable_evidence = o->free_space_evidence = o->moving_keypoint_check = false;
+        o->mask_margin_px = o->mask_propagation_frames = o->mask_completion_px = 0;
+      },
+      false, damage);
+  std::printf(
+      "w_xyz seed 4, 90 frames: exact masks %.4f m, degraded %.4f m (%d points erased), "
+      "degraded without the mechanisms %.4f m\n",
+      exact.ate_rmse, degraded.ate_rmse, degraded.summary.movable_points_erased, bare.ate_rmse);
+  EXPECT_EQ(degraded.frames_ok, 90);
+  EXPECT_GT(degraded.summary.movable_points_erased, 0);
+  EXPECT_LT(degraded.ate_rmse, 2.0 * exact.ate_rmse);  // measured 0.0075 against 0.0051 m
+  // The damage matters: without the mechanisms the same masks give 0.098 m (measured).
+  EXPECT_GT(bare.ate_rmse, 3.0 * degraded.ate_rmse);
 }
 
 }  // namespace

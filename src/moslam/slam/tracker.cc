@@ -53,7 +53,7 @@ Tracker::Tracker(map::Map* map, const camera::PinholeCamera& camera, double bf,
   options_.Check();
 }
 
-TrackOutcome Tracker::Track(feature::Frame frame) {
+TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
   TrackOutcome out;
   const size_t n = frame.size();
   current_.frame = std::move(frame);
@@ -139,6 +139,7 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
                                  ? std::max(options_.min_inliers, kMinInliersAfterRelocalization)
                                  : options_.min_inliers);
     if (!ok) out.reason = "too few inliers after local-map tracking";
+    if (ok) out.movable = JudgeLocalPoints(images);
     out.local_map_ms = MsSince(t0);
   }
   if (!ok) {
@@ -148,6 +149,7 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
     RecordPose(false);
     last_ok_ = false;
     have_velocity_ = false;
+    recent_frames_.clear();
     return out;
   }
   velocity_ = current_.T_cam_world * last_.T_cam_world.Inverse();
@@ -174,6 +176,10 @@ TrackOutcome Tracker::Track(feature::Frame frame) {
   out.new_keyframe = keyframe != nullptr;
   out.status = TrackStatus::kOk;
   out.T_cam_world = current_.T_cam_world;
+  // After a relocalization or a recovery the frames before may be anywhere (a kidnap): the
+  // moving-keypoint check starts again from this frame.
+  if (out.relocalized || out.recovered) recent_frames_.clear();
+  RememberFrame();
   // ORB-SLAM2 drops the outliers before the frame becomes the last frame.
   for (size_t i = 0; i < current_.points.size(); ++i) {
     if (current_.outlier[i]) current_.points[i] = nullptr;
@@ -512,7 +518,7 @@ bool Tracker::NeedNewKeyFrame() const {
     if (f.depth[i] <= 0.0f || f.depth[i] >= options_.close_depth) continue;
     if (current_.points[i] && !current_.outlier[i]) {
       ++tracked_close;
-    } else {
+    } else if (!f.NearMovable(i)) {  // those never become points (CreateKeyFrame)
       ++untracked_close;
     }
   }
@@ -546,6 +552,7 @@ bool Tracker::NeedNewKeyFrame() const {
 }
 
 std::shared_ptr<map::KeyFrame> Tracker::CreateKeyFrame() {
+  FlagMovingKeypoints();  // they seed no point, here or in local mapping
   auto kf = map_->CreateKeyFrame(current_.frame, current_.T_cam_world);
   for (size_t i = 0; i < current_.points.size(); ++i) {
     if (current_.points[i] && !current_.outlier[i]) kf->points[i] = current_.points[i];
@@ -555,7 +562,8 @@ std::shared_ptr<map::KeyFrame> Tracker::CreateKeyFrame() {
   std::vector<std::pair<float, size_t>> by_depth;
   const feature::Frame& f = current_.frame;
   for (size_t i = 0; i < f.size(); ++i) {
-    if (f.depth[i] > 0.0f) by_depth.emplace_back(f.depth[i], i);
+    // No new point at a movable mask's border or where the keypoint was seen moving.
+    if (f.depth[i] > 0.0f && !f.SeedsNoPoint(i)) by_depth.emplace_back(f.depth[i], i);
   }
   std::sort(by_depth.begin(), by_depth.end());
   const geometry::SE3 T_world_cam = kf->T_world_cam();

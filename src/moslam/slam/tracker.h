@@ -14,9 +14,11 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "moslam/camera/pinhole_camera.h"
@@ -26,6 +28,8 @@
 #include "moslam/optim/observation.h"
 #include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/mono_initializer.h"
+#include "moslam/slam/movable_points.h"
+#include "moslam/slam/moving_keypoints.h"
 #include "moslam/slam/relocalizer.h"
 
 namespace moslam::slam {
@@ -66,7 +70,20 @@ struct TrackerOptions {
   double recovery_window = 2.0;           // seconds
   double recovery_depth_fraction = 0.25;  // of the median scene depth (scale-free, monocular too)
   double recovery_speed_fraction = 0.5;   // of the distance predicted since the last frame
-  void Check() const;                     // InputError naming the field
+  // Map points on movable objects, judged by each tracked frame's mask and depth
+  // (slam/movable_points.h); both kinds of evidence on by default.
+  MovablePointsOptions movable;
+  // Keyframe keypoints seen moving since a few frames back seed no map point
+  // (slam/moving_keypoints.h).
+  MovingKeypointsOptions moving;
+  void Check() const;  // InputError naming the field
+};
+
+// What tracking reads of a frame beyond its keypoints: the movable-object mask the extractor
+// used and, RGB-D, the depth image (slam/movable_points.h). Either may be empty.
+struct FrameImages {
+  cv::Mat mask;   // CV_8UC1, non-zero = movable
+  cv::Mat depth;  // CV_32FC1 metres
 };
 
 enum class TrackStatus { kNotInitialized, kInitialized, kOk, kLost };
@@ -77,8 +94,9 @@ struct TrackOutcome {
   int num_matches = 0;
   int num_inliers = 0;
   bool new_keyframe = false;
-  bool relocalized = false;  // the pose came from relocalization (slam/relocalizer.h)
-  bool recovered = false;    // lost before, tracked again from the predicted pose
+  bool relocalized = false;    // the pose came from relocalization (slam/relocalizer.h)
+  bool recovered = false;      // lost before, tracked again from the predicted pose
+  MovablePointsStats movable;  // map points judged (and erased) by this frame's mask and depth
   geometry::SE3 T_cam_world;
   double track_ms = 0.0, local_map_ms = 0.0, keyframe_ms = 0.0;
 };
@@ -88,7 +106,7 @@ class Tracker {
   Tracker(map::Map* map, const camera::PinholeCamera& camera, double bf,
           const TrackerOptions& options, KeyFrameSink* sink);
 
-  TrackOutcome Track(feature::Frame frame);
+  TrackOutcome Track(feature::Frame frame, const FrameImages& images = {});
 
   // Enables relocalization (ORB-SLAM2's Tracking::Relocalization, slam/relocalizer.h): when the
   // motion model and the reference keyframe both fail, and on every frame while lost, the frame
@@ -137,6 +155,12 @@ class Tracker {
   int OptimizeCurrentPose();
   int DiscardOutliers();
   int TrackLocalMap();
+  // Movable objects (tracker_movable.cc): the local points this frame did not match, judged by
+  // its mask and depth (movable_points.h); the keyframe-to-be's keypoints that moved against
+  // the frame frame_gap back (moving_keypoints.h); the tracked frame kept for that check.
+  MovablePointsStats JudgeLocalPoints(const FrameImages& images);
+  void FlagMovingKeypoints();
+  void RememberFrame();
   void UpdateLocalKeyFrames();
   void UpdateLocalPoints();
   void SearchLocalPoints();
@@ -170,6 +194,9 @@ class Tracker {
   std::vector<std::shared_ptr<map::KeyFrame>> local_keyframes_;
   std::vector<std::shared_ptr<map::MapPoint>> local_points_;
   std::vector<FramePose> frame_poses_;
+  // The last tracked frames and their poses, oldest first, for the moving-keypoint check
+  // (MovingKeypointsOptions::frame_gap of them; cleared when tracking is lost).
+  std::deque<std::pair<feature::Frame, geometry::SE3>> recent_frames_;
   const KeyFrameDatabase* database_ = nullptr;
   // Frames since the last relocalization (ORB-SLAM2's mnLastRelocFrameId); "never" at start.
   uint64_t frames_since_relocalization_ = UINT64_MAX / 2;

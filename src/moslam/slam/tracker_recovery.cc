@@ -20,6 +20,8 @@ void TrackerOptions::Check() const {
   if (!(recovery_speed_fraction >= 0.0) || !std::isfinite(recovery_speed_fraction)) {
     throw InputError("TrackerOptions.recovery_speed_fraction must be >= 0");
   }
+  movable.Check();
+  moving.Check();
 }
 
 std::optional<geometry::SE3> Tracker::RecoveryPrediction() const {

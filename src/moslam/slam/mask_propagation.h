@@ -1,0 +1,53 @@
+// Movable-object masks carried from frame to frame (issue 24; NGD-SLAM and CFP-SLAM propagate
+// detections between network runs). A network that misses a body on one frame, or that runs
+// only on every k-th frame (`moslam run --segment-every K`), leaves frames with no mask where a
+// body still is: the last frame's mask, carried into the new frame with the camera's predicted
+// motion and the depth under it, covers them. Carried pixels age by one per frame and fade after
+// max_age frames; the network's pixels are age 1. The body's own motion is not modelled: the
+// carried mask grows by grow_px per frame instead (a walking person moves ~10 px per frame at
+// 30 frames/s and 2 m; depth completion, feature/movable_mask.h, refits it to the body).
+//
+// RGB-D: the exact warp with the depth under the mask (feature::WarpMask). Stereo and monocular
+// have no dense depth here: the mask is carried by the rotation alone (right for far objects).
+//
+// One instance per tracking thread; not thread-safe.
+#pragma once
+
+#include <optional>
+
+#include <opencv2/core.hpp>
+
+#include "moslam/camera/pinhole_camera.h"
+#include "moslam/geometry/se3.h"
+
+namespace moslam::slam {
+
+struct MaskPropagationOptions {
+  int max_age = 3;     // frames a mask is carried after the network's last sight (>= 1)
+  int grow_px = 2;     // the carried mask grows by this many pixels per frame (>= 0)
+  void Check() const;  // InputError naming the field
+};
+
+class MaskPropagator {
+ public:
+  MaskPropagator(const camera::PinholeCamera& camera, const MaskPropagationOptions& options);
+
+  // The mask of a new frame (CV_8UC1 0/255 of `size`): `network` (CV_8UC1 non-zero = movable,
+  // or empty: none this frame) united with the last frame's mask carried by T_cur_last (the
+  // motion from the last frame's camera into this one's; nullopt: unknown, carried unmoved).
+  // Empty when no pixel is movable. Held until Commit().
+  cv::Mat MaskFor(const cv::Mat& network, const cv::Size& size,
+                  const std::optional<geometry::SE3>& T_cur_last);
+  // The frame MaskFor was called for is done: its mask (with ages) and `depth` (CV_32FC1 metres
+  // or empty) are what the next frame's mask is carried from.
+  void Commit(const cv::Mat& depth);
+  void Reset();
+
+ private:
+  camera::PinholeCamera camera_;
+  MaskPropagationOptions options_;
+  cv::Mat last_ages_, last_depth_;  // last committed frame (empty: none)
+  cv::Mat pending_ages_;            // the frame MaskFor was last called for
+};
+
+}  // namespace moslam::slam
