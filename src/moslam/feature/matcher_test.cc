@@ -20,15 +20,7 @@ OrbExtractorOptions Options(int n) {
   return o;
 }
 
-camera::PinholeCamera Camera() {
-  camera::PinholeOptions o;
-  o.fx = o.fy = 500.0;
-  o.cx = 320.0;
-  o.cy = 240.0;
-  o.width = 640;
-  o.height = 480;
-  return camera::PinholeCamera(o);
-}
+camera::PinholeCamera Camera() { return test::TestCamera(); }
 
 cv::Mat Warp(const cv::Mat& image, const cv::Mat& affine) {
   cv::Mat out;

@@ -6,21 +6,15 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "moslam/feature/test_images.h"
 #include "moslam/geometry/se3.h"
 #include "moslam/util/error.h"
 
 namespace moslam::feature {
 namespace {
 
-camera::PinholeCamera Camera() {
-  camera::PinholeOptions o;
-  o.fx = o.fy = 500.0;
-  o.cx = 320.0;
-  o.cy = 240.0;
-  o.width = 640;
-  o.height = 480;
-  return camera::PinholeCamera(o);
-}
+using test::TestCamera;
+camera::PinholeCamera Camera() { return TestCamera(); }
 
 // A scene of a box face (the "person", a fronto-parallel rectangle x in [-0.3, 0.3], y in
 // [-0.8, 0.8] of the world, 2 m in front of the first camera) before a wall at 4 m. Rendered for

@@ -8,7 +8,20 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "moslam/camera/pinhole_camera.h"
+
 namespace moslam::feature::test {
+
+// An ideal 640x480 pinhole camera, f = 500 px, principal point at the centre.
+inline camera::PinholeCamera TestCamera() {
+  camera::PinholeOptions o;
+  o.fx = o.fy = 500.0;
+  o.cx = 320.0;
+  o.cy = 240.0;
+  o.width = 640;
+  o.height = 480;
+  return camera::PinholeCamera(o);
+}
 
 // A deterministic textured CV_8UC1 image.
 inline cv::Mat TexturedImage(int width, int height, uint64_t seed) {

@@ -26,9 +26,8 @@ void MaskDamageOptions::Check() const {
 
 MaskDamageOptions ParseMaskDamage(const std::string& spec) {
   MaskDamageOptions options;
-  for (const std::string_view item : SplitFields(spec, true)) {
-    const std::string_view field = Trim(item);
-    if (field.empty()) continue;
+  // Fields come split on commas and blanks, non-empty.
+  for (const std::string_view field : SplitFields(spec, true)) {
     const size_t eq = field.find('=');
     if (eq == std::string_view::npos) {
       ThrowInput(
@@ -36,8 +35,8 @@ MaskDamageOptions ParseMaskDamage(const std::string& spec) {
           "radius, seed)",
           field);
     }
-    const std::string key(Trim(field.substr(0, eq)));
-    const std::string_view value = Trim(field.substr(eq + 1));
+    const std::string key(field.substr(0, eq));
+    const std::string_view value = field.substr(eq + 1);
     const auto number = ParseDouble(value);
     if (!number) ThrowInput("--mask-damage {}: '{}' is not a number", key, value);
     const auto whole = [&] {
@@ -78,13 +77,13 @@ cv::Mat DamageMask(const cv::Mat& mask, int frame_index, const MaskDamageOptions
     const int k = 2 * options.erode_px + 1;
     cv::erode(out, out, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k)));
   }
-  if (options.border_px > 0) {
+  if (options.border_px > 0) {  // only the inner rectangle is kept
     const int b = options.border_px;
-    const int w = out.cols, h = out.rows;
-    out(cv::Rect(0, 0, w, std::min(b, h))).setTo(0);
-    out(cv::Rect(0, std::max(0, h - b), w, std::min(b, h))).setTo(0);
-    out(cv::Rect(0, 0, std::min(b, w), h)).setTo(0);
-    out(cv::Rect(std::max(0, w - b), 0, std::min(b, w), h)).setTo(0);
+    cv::Mat kept = cv::Mat::zeros(out.size(), CV_8UC1);
+    const cv::Rect inner =
+        cv::Rect(b, b, out.cols - 2 * b, out.rows - 2 * b) & cv::Rect(0, 0, out.cols, out.rows);
+    if (inner.area() > 0) out(inner).copyTo(kept(inner));
+    out = kept;
   }
   if (options.holes > 0.0) {
     std::vector<cv::Point> pixels;

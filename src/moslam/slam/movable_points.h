@@ -31,10 +31,11 @@
 namespace moslam::slam {
 
 struct MovablePointsOptions {
-  bool mask_evidence = true;        // points seen inside a movable mask
-  bool free_space_evidence = true;  // RGB-D: points in front of the measured surface
-  int mask_threshold = 2;           // frames of mask evidence that erase a point
-  int free_space_threshold = 3;     // frames of free-space evidence that erase a point
+  bool mask_evidence = true;  // points seen inside a movable mask
+  // RGB-D: points in front of the measured surface; off as SystemOptions::free_space_evidence
+  bool free_space_evidence = false;
+  int mask_threshold = 2;        // frames of mask evidence that erase a point
+  int free_space_threshold = 3;  // frames of free-space evidence that erase a point
   // Depth agreement: |measured - point depth| <= depth_abs + depth_rel * depth (metres).
   double depth_abs = 0.05;
   double depth_rel = 0.03;

@@ -48,15 +48,31 @@ JudgingFrame Frame(double background, int u0, int u1, double mask_depth) {
   return f;
 }
 
+// `times` frames of judging; the stats of the last.
+MovablePointsStats Judge(Fixture* fx, const JudgingFrame& frame,
+                         const MovablePointsOptions& options, int times = 1) {
+  MovablePointsStats stats;
+  for (int k = 0; k < times; ++k) {
+    stats = JudgeMovablePoints(&fx->map, fx->points, frame, TestCamera(), options);
+  }
+  return stats;
+}
+
+MovablePointsOptions WithFreeSpace() {
+  MovablePointsOptions options;
+  options.free_space_evidence = true;
+  return options;
+}
+
 TEST(MovablePoints, APointSeenInLaterMasksIsErased) {
   Fixture fx(2);
   MovablePointsOptions options;  // two frames of mask evidence erase
   // The centre point (u = 320) lies in a body's mask, at the body's depth.
   const JudgingFrame frame = Frame(2.0, 300, 340, 2.0);
-  MovablePointsStats stats = JudgeMovablePoints(&fx.map, fx.points, frame, TestCamera(), options);
+  MovablePointsStats stats = Judge(&fx, frame, options);
   EXPECT_EQ(stats.mask_hits, 1);
   EXPECT_EQ(stats.erased, 0);
-  stats = JudgeMovablePoints(&fx.map, fx.points, frame, TestCamera(), options);
+  stats = Judge(&fx, frame, options);
   EXPECT_EQ(stats.erased, 1);
   EXPECT_TRUE(fx.points[1]->bad);
   EXPECT_EQ(fx.map.points().size(), 3u);
@@ -65,8 +81,7 @@ TEST(MovablePoints, APointSeenInLaterMasksIsErased) {
   options.mask_evidence = false;
   options.free_space_evidence = false;
   Fixture off(2);
-  for (int k = 0; k < 5; ++k)
-    JudgeMovablePoints(&off.map, off.points, frame, TestCamera(), options);
+  Judge(&off, frame, options, 5);
   EXPECT_EQ(off.map.points().size(), 4u);
 }
 
@@ -75,8 +90,7 @@ TEST(MovablePoints, AStaticPointBehindAPassingBodyIsKept) {
   // A body 1 m in front of the centre point covers it: nearer depth there, so no evidence.
   const JudgingFrame frame = Frame(2.0, 300, 340, 1.0);
   for (int k = 0; k < 5; ++k) {
-    const MovablePointsStats stats =
-        JudgeMovablePoints(&fx.map, fx.points, frame, TestCamera(), MovablePointsOptions{});
+    const MovablePointsStats stats = Judge(&fx, frame, WithFreeSpace());
     EXPECT_EQ(stats.mask_hits, 0);
     EXPECT_EQ(stats.erased, 0);
   }
@@ -90,12 +104,9 @@ TEST(MovablePoints, FreeSpaceWhereAPointShouldBeErasesIt) {
   JudgingFrame frame;
   frame.depth = cv::Mat(480, 640, CV_32FC1, cv::Scalar(2.02));
   frame.depth.colRange(400, 640).setTo(4.0);
-  MovablePointsOptions options;  // three frames of free-space evidence erase
-  for (int k = 0; k < 2; ++k) {
-    EXPECT_EQ(JudgeMovablePoints(&fx.map, fx.points, frame, TestCamera(), options).erased, 0);
-  }
-  const MovablePointsStats stats =
-      JudgeMovablePoints(&fx.map, fx.points, frame, TestCamera(), options);
+  const MovablePointsOptions options = WithFreeSpace();  // three frames erase
+  for (int k = 0; k < 2; ++k) EXPECT_EQ(Judge(&fx, frame, options).erased, 0);
+  const MovablePointsStats stats = Judge(&fx, frame, options);
   EXPECT_EQ(stats.free_space_hits, 2);
   EXPECT_EQ(stats.erased, 2);
   EXPECT_FALSE(fx.points[0]->bad);
@@ -107,8 +118,7 @@ TEST(MovablePoints, FreeSpaceWhereAPointShouldBeErasesIt) {
   Fixture edge(2);
   frame.depth.setTo(2.02);
   frame.depth.colRange(196, 640).setTo(4.0);
-  for (int k = 0; k < 5; ++k)
-    JudgeMovablePoints(&edge.map, edge.points, frame, TestCamera(), options);
+  Judge(&edge, frame, options, 5);
   EXPECT_FALSE(edge.points[0]->bad);
 }
 
@@ -117,12 +127,10 @@ TEST(MovablePoints, WithoutDepthOnlyYoungPointsAreJudged) {
   options.max_observations_without_depth = 4;
   const JudgingFrame frame = Frame(0.0, 300, 340, 0.0);
   Fixture young(2);  // two observations
-  for (int k = 0; k < 2; ++k)
-    JudgeMovablePoints(&young.map, young.points, frame, TestCamera(), options);
+  Judge(&young, frame, options, 2);
   EXPECT_TRUE(young.points[1]->bad);
   Fixture old(6);  // six observations: a static point that a body passes in front of
-  for (int k = 0; k < 5; ++k)
-    JudgeMovablePoints(&old.map, old.points, frame, TestCamera(), options);
+  Judge(&old, frame, options, 5);
   EXPECT_FALSE(old.points[1]->bad);
 }
 

@@ -7,19 +7,12 @@
 #include <vector>
 
 #include "moslam/camera/pinhole_camera.h"
+#include "moslam/feature/test_images.h"
 #include "moslam/map/map.h"
 
 namespace moslam::slam::testing {
 
-inline camera::PinholeCamera TestCamera() {
-  camera::PinholeOptions o;
-  o.fx = o.fy = 500.0;
-  o.cx = 320.0;
-  o.cy = 240.0;
-  o.width = 640;
-  o.height = 480;
-  return camera::PinholeCamera(o);
-}
+inline camera::PinholeCamera TestCamera() { return feature::test::TestCamera(); }
 
 struct Scene {
   std::vector<Eigen::Vector3d> points;

@@ -71,7 +71,7 @@ struct TrackerOptions {
   double recovery_depth_fraction = 0.25;  // of the median scene depth (scale-free, monocular too)
   double recovery_speed_fraction = 0.5;   // of the distance predicted since the last frame
   // Map points on movable objects, judged by each tracked frame's mask and depth
-  // (slam/movable_points.h); both kinds of evidence on by default.
+  // (slam/movable_points.h); mask evidence on, free space off by default.
   MovablePointsOptions movable;
   // Keyframe keypoints seen moving since a few frames back seed no map point
   // (slam/moving_keypoints.h).
