@@ -23,6 +23,7 @@ struct SynthArgs {
   std::string contact_sheet;
   bool list = false;
   bool exact = false;
+  std::string people = "boxes";
   std::string check;
   int check_gap = 5;
 };
@@ -60,8 +61,10 @@ void Run(SynthArgs& args) {
     return;
   }
   args.options.sensor_noise = !args.exact;
+  args.options.people = synth::ParsePeopleStyle(args.people);
   if (!args.contact_sheet.empty()) {
-    synth::WriteContactSheet(args.contact_sheet, args.options.seed, args.options.textures_dir, 4);
+    synth::WriteContactSheet(args.contact_sheet, args.options.seed, args.options.textures_dir, 4,
+                             args.options.people);
     fmt::print("wrote {}\n", args.contact_sheet);
     return;
   }
@@ -101,6 +104,10 @@ void AddSynthCommand(CLI::App& app) {
   cmd->add_option("--png-compression", o.png_compression, "zlib level of PNGs, 0-9")
       ->capture_default_str();
   cmd->add_flag("--exact", args->exact, "No sensor noise: exact depth and colour");
+  cmd->add_option("--people", args->people,
+                  "How people are drawn: boxes (the benchmark's figures) or bodies (skinned "
+                  "meshes with faces, hair, clothes and a footprint-driven gait)")
+      ->capture_default_str();
   cmd->add_option("--train", args->train,
                   "Training mode: this many independent frames (labels; masks under eval_only/)");
   cmd->add_option("--contact-sheet", args->contact_sheet,

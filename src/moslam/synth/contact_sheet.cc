@@ -52,7 +52,7 @@ cv::Mat DepthColour(const FrameData& f) {
 }  // namespace
 
 void WriteContactSheet(const std::string& path, uint64_t seed, const std::string& textures_dir,
-                       int columns) {
+                       int columns, PeopleStyle people) {
   const int tile_w = 192;  // keeps the PNG under ~3 MB for the repository
   std::vector<cv::Mat> rows;
   for (const PresetInfo& preset : Presets()) {
@@ -61,13 +61,14 @@ void WriteContactSheet(const std::string& path, uint64_t seed, const std::string
     o.seed = seed;
     o.textures_dir = textures_dir;
     o.out = "(contact sheet)";
+    o.people = people;
     const int w = preset.stereo ? 613 : 320, h = preset.stereo ? 185 : 240;
     o.width = w;
     o.height = h;
     o.texture_size = 256;
     TextureSet textures = TextureSet::Procedural(seed, 4, o.texture_size);
     if (!textures_dir.empty()) textures.AddPhotos(textures_dir, o.texture_size, 2, 0);
-    const SequenceSpec spec = MakePreset(preset.name, seed, textures, w, h);
+    const SequenceSpec spec = MakePreset(preset.name, seed, textures, w, h, people);
     Renderer renderer(w, h, textures);
     std::vector<cv::Mat> tiles;
     for (int c = 0; c < columns; ++c) {

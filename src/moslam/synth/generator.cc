@@ -151,7 +151,8 @@ FrameData RenderFrame(const SequenceSpec& spec, Renderer& renderer, int index,
   f.T_world_cam = spec.T_world_cam(t);
   const geometry::SE3 T_cam_world = f.T_world_cam.Inverse();
   RenderOutput out;
-  renderer.Render(spec.world.BoxesAt(t), spec.camera, T_cam_world, spec.lighting, &out);
+  renderer.Render(spec.world.BoxesAt(t), spec.world.MeshesAt(t), spec.camera, T_cam_world,
+                  spec.lighting, &out);
   if (options.motion_blur) {
     // Exposure of 1/60 s centred on t: the mean of kBlurSamples renders (colour only; depth and
     // labels stay those of time t, as a Kinect's depth is not blurred like its colour).
@@ -161,8 +162,8 @@ FrameData RenderFrame(const SequenceSpec& spec, Renderer& renderer, int index,
     for (int k = 0; k < kBlurSamples; ++k) {
       if (k == kBlurSamples / 2) continue;
       const double ts = t + (static_cast<double>(k) / (kBlurSamples - 1) - 0.5) / 60.0;
-      renderer.Render(spec.world.BoxesAt(ts), spec.camera, spec.T_world_cam(ts).Inverse(),
-                      spec.lighting, &sub);
+      renderer.Render(spec.world.BoxesAt(ts), spec.world.MeshesAt(ts), spec.camera,
+                      spec.T_world_cam(ts).Inverse(), spec.lighting, &sub);
       cv::accumulate(sub.rgb, sum);
     }
     sum.convertTo(out.rgb, CV_8UC3, 1.0 / kBlurSamples);
@@ -181,8 +182,8 @@ FrameData RenderFrame(const SequenceSpec& spec, Renderer& renderer, int index,
     const geometry::SE3 T_left_right(Eigen::Quaterniond::Identity(),
                                      Eigen::Vector3d(spec.baseline_m, 0, 0));
     RenderOutput right;
-    renderer.Render(spec.world.BoxesAt(t), spec.camera, (f.T_world_cam * T_left_right).Inverse(),
-                    spec.lighting, &right);
+    renderer.Render(spec.world.BoxesAt(t), spec.world.MeshesAt(t), spec.camera,
+                    (f.T_world_cam * T_left_right).Inverse(), spec.lighting, &right);
     f.right = right.rgb;
     AddColourNoise(&f.right, colour, noise_seed, static_cast<uint64_t>(index) * 2 + 1);
   } else {
@@ -197,13 +198,14 @@ GenerateStats GenerateSequence(const GeneratorOptions& options) {
   options.Check();
   const PresetInfo& info = FindPreset(options.preset);
   const TextureSet textures = LoadTextures(options, options.seed, 0);
-  const SequenceSpec spec =
-      MakePreset(options.preset, options.seed, textures, options.width, options.height);
+  const SequenceSpec spec = MakePreset(options.preset, options.seed, textures, options.width,
+                                       options.height, options.people);
   const int n = options.frames > 0 ? options.frames : info.default_frames;
   Renderer renderer(spec.camera.width, spec.camera.height, textures);
-  spdlog::info("synth: {} seed {} -> {} ({} frames {}x{}, {} textures, {})", options.preset,
-               options.seed, options.out, n, spec.camera.width, spec.camera.height,
-               textures.textures().size(), renderer.RendererName());
+  spdlog::info("synth: {} seed {} -> {} ({} frames {}x{}, {} textures, people as {}, {})",
+               options.preset, options.seed, options.out, n, spec.camera.width, spec.camera.height,
+               textures.textures().size(), PeopleStyleName(options.people),
+               renderer.RendererName());
   OutputWriter writer(options.out, spec, options);
   const auto start = std::chrono::steady_clock::now();
   Coverage coverage;
@@ -233,8 +235,9 @@ GenerateStats GenerateTraining(const GeneratorOptions& options, int count) {
   Pipeline(
       count,
       [&](int i) {
-        const SequenceSpec spec = MakeTrainingScene(
-            Rng::Mix(options.seed * 1000003ULL + static_cast<uint64_t>(i)), textures, w, h);
+        const SequenceSpec spec =
+            MakeTrainingScene(Rng::Mix(options.seed * 1000003ULL + static_cast<uint64_t>(i)),
+                              textures, w, h, options.people);
         GeneratorOptions frame_options = options;
         frame_options.seed = options.seed * 7919 + static_cast<uint64_t>(i);
         return RenderFrame(spec, renderer, 0, frame_options);

@@ -34,6 +34,8 @@ struct GeneratorOptions {
   // Also write depth_gt/<stamp>.png: the exact depth (no noise, no holes; factor 5000) for
   // ground-truth checks (synth/check.h). RGB-D presets only.
   bool write_exact_depth = false;
+  // People as boxes (the benchmark's figures until issue 25 lands) or as skinned bodies.
+  PeopleStyle people = PeopleStyle::kBoxes;
 
   // Throws InputError naming the field when a value is out of range.
   void Check() const;
@@ -84,6 +86,6 @@ std::vector<std::string> VisibleClasses(const cv::Mat& class_id, int min_pixels)
 // A contact sheet: for each preset a row of `columns` frames, each as RGB, mask overlay and
 // depth colour map, rendered at a reduced size. Writes a PNG to `path`.
 void WriteContactSheet(const std::string& path, uint64_t seed, const std::string& textures_dir,
-                       int columns);
+                       int columns, PeopleStyle people = PeopleStyle::kBoxes);
 
 }  // namespace moslam::synth

@@ -236,7 +236,7 @@ camera::PinholeOptions KittiCamera(int width, int height) {
 }
 
 SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet& textures,
-                        int width, int height) {
+                        int width, int height, PeopleStyle people_style) {
   SequenceSpec spec;
   spec.info = FindPreset(name);
   // static_xyz is w_xyz with the people taken out afterwards: the same random stream gives the same
@@ -245,6 +245,7 @@ SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet
   const std::string scene_name = static_scene ? "w_xyz" : name;
   Rng rng(seed, kStreamScene + static_cast<uint64_t>(&FindPreset(scene_name) - Presets().data()));
   Builder b(&spec.world, &rng, &textures);
+  b.SetPeopleStyle(people_style, seed);
   if (internal::IsAliasingPreset(name)) {
     internal::MakeAliasingPreset(name, b, &spec, width, height);
     return spec;
@@ -271,11 +272,13 @@ SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet
   return spec;
 }
 
-SequenceSpec MakeTrainingScene(uint64_t seed, const TextureSet& textures, int width, int height) {
+SequenceSpec MakeTrainingScene(uint64_t seed, const TextureSet& textures, int width, int height,
+                               PeopleStyle people_style) {
   SequenceSpec spec;
   spec.info = {"train", "independent training frame", false, 1, 30.0};
   Rng rng(seed, kStreamTraining);
   Builder b(&spec.world, &rng, &textures);
+  b.SetPeopleStyle(people_style, seed ^ 0x7AA1ULL);
   const double w = rng.Uniform(4, 8), d = rng.Uniform(4, 8), h = rng.Uniform(2.4, 3.2);
   b.Room(w, d, h);
   const int desks = rng.Index(4);

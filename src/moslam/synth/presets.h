@@ -45,13 +45,15 @@ camera::PinholeOptions TumCamera(int width, int height);
 camera::PinholeOptions KittiCamera(int width, int height);
 
 // Builds preset `name` with `seed`. Texture indices refer to `textures`. width/height: image size
-// (0: the preset's own).
+// (0: the preset's own). `people`: how its people are drawn; the scene, the paths and the camera
+// are the same either way (bodies draw their looks from a stream of their own).
 SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet& textures,
-                        int width = 0, int height = 0);
+                        int width = 0, int height = 0, PeopleStyle people = PeopleStyle::kBoxes);
 
 // One random indoor scene and view for the training mode: a random room, furniture, 0-3 people
 // (walking or seated, random gait phase) and a random viewpoint. Seeds are mixed with a stream
 // the presets never use, so training scenes are disjoint from benchmark scenes.
-SequenceSpec MakeTrainingScene(uint64_t seed, const TextureSet& textures, int width, int height);
+SequenceSpec MakeTrainingScene(uint64_t seed, const TextureSet& textures, int width, int height,
+                               PeopleStyle people = PeopleStyle::kBoxes);
 
 }  // namespace moslam::synth

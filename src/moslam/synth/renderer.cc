@@ -27,6 +27,8 @@ layout(location = 0) in vec3 position;   // cube corner in [-1, 1]^3
 layout(location = 1) in vec3 normal;
 layout(location = 2) in vec2 face_uv;    // position on the face in [-1, 1]^2 (y up on side faces)
 layout(location = 3) in vec2 face_axes;  // box axes (0, 1, 2) along face_uv.x and face_uv.y
+layout(location = 4) in vec3 vertex_colour;  // meshes: multiplies the texture (boxes: 1)
+uniform int mesh;         // 1: a mesh in world coordinates with its own texture coordinates
 uniform mat4 model;       // T_world_box * diag(half)
 uniform mat4 view;        // T_cam_world (OpenCV camera axes)
 uniform mat4 projection;  // intrinsics, image row 0 at NDC y = -1
@@ -36,7 +38,17 @@ uniform vec2 uv_offset;
 out vec2 uv;
 out float z_cam;
 out vec3 normal_world;
+out vec3 colour_mul;
 void main() {
+  colour_mul = vertex_colour;
+  if (mesh == 1) {
+    vec4 p_cam = view * vec4(position, 1.0);
+    z_cam = p_cam.z;
+    gl_Position = projection * p_cam;
+    normal_world = normal;
+    uv = face_uv;
+    return;
+  }
   vec4 p_cam = view * (model * vec4(position, 1.0));
   z_cam = p_cam.z;
   gl_Position = projection * p_cam;
@@ -54,6 +66,8 @@ const char* kFragmentShader = R"(#version 330 core
 in vec2 uv;
 in float z_cam;
 in vec3 normal_world;
+in vec3 colour_mul;
+uniform int mesh;
 uniform sampler2D tex;
 uniform vec3 light;   // unit direction the light travels
 uniform float ambient;
@@ -64,8 +78,17 @@ layout(location = 0) out vec4 colour;
 layout(location = 1) out float depth;
 layout(location = 2) out uvec2 ids;
 void main() {
-  float shade = (ambient + diffuse * abs(dot(normalize(normal_world), light))) * tint;
-  colour = vec4(texture(tex, uv).rgb * shade, 1.0);
+  if (mesh == 1) {
+    // Meshes have outward normals: one-sided diffuse light plus an ambient term brighter from
+    // the sky than from the floor, which gives round bodies their shading.
+    vec3 n = normalize(normal_world);
+    float shade = ambient * (0.82 + 0.18 * n.z) + diffuse * max(0.0, -dot(n, light));
+    colour = vec4(texture(tex, uv).rgb * colour_mul * shade, 1.0);
+  } else {
+    // Boxes are lit from both sides (rooms are seen from inside).
+    float shade = (ambient + diffuse * abs(dot(normalize(normal_world), light))) * tint;
+    colour = vec4(texture(tex, uv).rgb * shade, 1.0);
+  }
   depth = z_cam;
   ids = label;
 }
@@ -135,10 +158,14 @@ struct Renderer::Impl {
   OSMesaContext context = nullptr;
   std::vector<unsigned char> dummy;  // OSMesa needs a default buffer; we draw into the FBO
   GLuint program = 0, vao = 0, vbo = 0, fbo = 0;
+  GLuint mesh_vao = 0, mesh_vbo = 0, mesh_ebo = 0;
+  GLuint white = 0;                 // 4x4 white texture for plain-coloured mesh parts (texture -1)
+  GLuint fabric = 0;                // plain cloth (texture -2, MakeFabricTexture)
+  std::vector<float> mesh_data;     // per-frame vertex upload buffer
   std::array<GLuint, 4> targets{};  // colour, depth (R32F), ids (RG16UI), depth buffer
   std::vector<GLuint> textures;
   GLint u_model = -1, u_view = -1, u_projection = -1, u_half = -1, u_tile = -1, u_offset = -1;
-  GLint u_light = -1, u_ambient = -1, u_diffuse = -1, u_tint = -1, u_label = -1;
+  GLint u_light = -1, u_ambient = -1, u_diffuse = -1, u_tint = -1, u_label = -1, u_mesh = -1;
   cv::Mat ids;  // CV_16UC2 read-back buffer
 };
 
@@ -190,6 +217,7 @@ Renderer::Renderer(int width, int height, const TextureSet& texture_set)
   g.u_diffuse = glGetUniformLocation(g.program, "diffuse");
   g.u_tint = glGetUniformLocation(g.program, "tint");
   g.u_label = glGetUniformLocation(g.program, "label");
+  g.u_mesh = glGetUniformLocation(g.program, "mesh");
   glUniform1i(glGetUniformLocation(g.program, "tex"), 0);
 
   const std::vector<float> cube = CubeVertices();
@@ -207,6 +235,26 @@ Renderer::Renderer(int width, int height, const TextureSet& texture_set)
                           reinterpret_cast<const void*>(offset * sizeof(float)));
     offset += static_cast<size_t>(sizes[a]);
   }
+  glVertexAttrib3f(4, 1.0f, 1.0f, 1.0f);  // boxes: no vertex colour (attribute 4 not enabled)
+
+  // Meshes: interleaved position, normal, texture coordinates and colour (11 floats), indexed.
+  glGenVertexArrays(1, &g.mesh_vao);
+  glBindVertexArray(g.mesh_vao);
+  glGenBuffers(1, &g.mesh_vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, g.mesh_vbo);
+  glGenBuffers(1, &g.mesh_ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.mesh_ebo);
+  const GLuint mesh_locations[4] = {0, 1, 2, 4};
+  const int mesh_sizes[4] = {3, 3, 2, 3};
+  offset = 0;
+  for (int a = 0; a < 4; ++a) {
+    glEnableVertexAttribArray(mesh_locations[a]);
+    glVertexAttribPointer(mesh_locations[a], mesh_sizes[a], GL_FLOAT, GL_FALSE, 11 * sizeof(float),
+                          reinterpret_cast<const void*>(offset * sizeof(float)));
+    offset += static_cast<size_t>(mesh_sizes[a]);
+  }
+  glVertexAttrib2f(3, 0.0f, 0.0f);
+  glBindVertexArray(g.vao);
 
   glGenFramebuffers(1, &g.fbo);
   glBindFramebuffer(GL_FRAMEBUFFER, g.fbo);
@@ -250,6 +298,27 @@ Renderer::Renderer(int width, int height, const TextureSet& texture_set)
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_MIRRORED_REPEAT);
     g.textures.push_back(id);
   }
+  {
+    const unsigned char white[4 * 4 * 3] = {
+        255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255,
+        255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255,
+        255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255};
+    glGenTextures(1, &g.white);
+    glBindTexture(GL_TEXTURE_2D, g.white);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, 4, 4, 0, GL_RGB, GL_UNSIGNED_BYTE, white);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    const cv::Mat cloth = MakeFabricTexture(128);
+    glGenTextures(1, &g.fabric);
+    glBindTexture(GL_TEXTURE_2D, g.fabric);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, cloth.cols, cloth.rows, 0, GL_RGB, GL_UNSIGNED_BYTE,
+                 cloth.data);
+    glGenerateMipmap(GL_TEXTURE_2D);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_MIRRORED_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_MIRRORED_REPEAT);
+  }
   glEnable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);  // rooms are seen from inside, objects from outside
   glViewport(0, 0, width, height);
@@ -274,6 +343,47 @@ std::string Renderer::RendererName() const {
 void Renderer::Render(const std::vector<Box>& boxes, const camera::PinholeOptions& camera,
                       const geometry::SE3& T_cam_world, const Lighting& lighting,
                       RenderOutput* out) {
+  Render(boxes, {}, camera, T_cam_world, lighting, out);
+}
+
+void Renderer::DrawMeshes(const std::vector<Mesh>& meshes) {
+  Impl& g = *impl_;
+  glUniform1i(g.u_mesh, 1);
+  glUniform1f(g.u_tint, 1.0f);
+  glBindVertexArray(g.mesh_vao);
+  for (const Mesh& mesh : meshes) {
+    g.mesh_data.resize(mesh.vertices.size() * 11);
+    float* d = g.mesh_data.data();
+    for (const MeshVertex& v : mesh.vertices) {
+      d = std::copy(v.p.data(), v.p.data() + 3, d);
+      d = std::copy(v.n.data(), v.n.data() + 3, d);
+      d = std::copy(v.uv.data(), v.uv.data() + 2, d);
+      d = std::copy(v.colour.data(), v.colour.data() + 3, d);
+    }
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(g.mesh_data.size() * sizeof(float)),
+                 g.mesh_data.data(), GL_STREAM_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(mesh.indices.size() * sizeof(uint32_t)),
+                 mesh.indices.data(), GL_STREAM_DRAW);
+    glUniform2ui(g.u_label, mesh.class_id, mesh.instance);
+    for (const MeshPart& part : mesh.parts) {
+      MOSLAM_CHECK(part.texture >= -2 && part.texture < static_cast<int>(g.textures.size()));
+      MOSLAM_CHECK(part.first + part.count <= mesh.indices.size());
+      const GLuint texture = part.texture == -2   ? g.fabric
+                             : part.texture == -1 ? g.white
+                                                  : g.textures[static_cast<size_t>(part.texture)];
+      glBindTexture(GL_TEXTURE_2D, texture);
+      glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(part.count), GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(part.first * sizeof(uint32_t)));
+    }
+  }
+  glBindVertexArray(g.vao);
+  glUniform1i(g.u_mesh, 0);
+}
+
+void Renderer::Render(const std::vector<Box>& boxes, const std::vector<Mesh>& meshes,
+                      const camera::PinholeOptions& camera, const geometry::SE3& T_cam_world,
+                      const Lighting& lighting, RenderOutput* out) {
   Impl& g = *impl_;
   MOSLAM_CHECK(camera.width == g.width && camera.height == g.height)
       << "camera " << camera.width << "x" << camera.height << " vs renderer " << g.width << "x"
@@ -304,6 +414,8 @@ void Renderer::Render(const std::vector<Box>& boxes, const camera::PinholeOption
   glUniform1f(g.u_ambient, lighting.ambient);
   glUniform1f(g.u_diffuse, lighting.diffuse);
   glActiveTexture(GL_TEXTURE0);
+  // People first: they are in front of most of the room.
+  DrawMeshes(meshes);
   // Front to back, large boxes (walls, floor, road) last: llvmpipe tests depth before shading, so
   // hidden surfaces drawn later cost little. Order does not change the result (depth test, opaque
   // boxes; ties are resolved by the stable order).

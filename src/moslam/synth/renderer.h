@@ -1,5 +1,5 @@
-// Off-screen OpenGL renderer of textured boxes through OSMesa (Mesa's llvmpipe software
-// rasterizer).
+// Off-screen OpenGL renderer of textured boxes and triangle meshes through OSMesa (Mesa's llvmpipe
+// software rasterizer).
 //
 // Why OSMesa rather than a ray caster of our own: llvmpipe is a complete, multithreaded GL 3.3+
 // implementation shipped by Debian (libosmesa6-dev), so we get mipmapped trilinear
@@ -58,11 +58,16 @@ class Renderer {
   // renderer's) at T_cam_world (OpenCV camera axes: x right, y down, z forward).
   void Render(const std::vector<Box>& boxes, const camera::PinholeOptions& camera,
               const geometry::SE3& T_cam_world, const Lighting& lighting, RenderOutput* out);
+  // ... and triangle meshes in world coordinates (skinned people, body.h).
+  void Render(const std::vector<Box>& boxes, const std::vector<Mesh>& meshes,
+              const camera::PinholeOptions& camera, const geometry::SE3& T_cam_world,
+              const Lighting& lighting, RenderOutput* out);
 
   // "llvmpipe (LLVM 15.0.6) ..." for logs.
   std::string RendererName() const;
 
  private:
+  void DrawMeshes(const std::vector<Mesh>& meshes);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -5,7 +5,9 @@
 
 #include <Eigen/Geometry>
 
+#include "moslam/synth/gait.h"
 #include "moslam/util/check.h"
+#include "moslam/util/error.h"
 
 namespace moslam::synth {
 namespace {
@@ -114,11 +116,22 @@ const char* ClassName(int class_id) {
 
 bool IsMovableClass(int class_id) { return class_id == kPerson || class_id == kCar; }
 
+const char* PeopleStyleName(PeopleStyle style) {
+  return style == PeopleStyle::kBodies ? "bodies" : "boxes";
+}
+
+PeopleStyle ParsePeopleStyle(const std::string& name) {
+  if (name == "boxes") return PeopleStyle::kBoxes;
+  if (name == "bodies") return PeopleStyle::kBodies;
+  throw InputError("people style '" + name + "': expected boxes or bodies");
+}
+
 Person Person::Walking(const PersonLook& look, std::vector<Eigen::Vector2d> path, double speed,
                        double start_m) {
   MOSLAM_CHECK(path.size() >= 2 && speed > 0);
   Person p;
   p.look_ = look;
+  if (look.body) p.body_ = std::make_shared<const BodyModel>(look.shape);
   p.path_ = std::move(path);
   p.speed_ = speed;
   p.start_m_ = start_m;
@@ -135,6 +148,7 @@ Person Person::Seated(const PersonLook& look, const Eigen::Vector2d& seat, doubl
                       double seat_height, double phase) {
   Person p;
   p.look_ = look;
+  if (look.body) p.body_ = std::make_shared<const BodyModel>(look.shape);
   p.seated_ = true;
   p.seat_ = seat;
   p.heading_ = heading;
@@ -143,12 +157,7 @@ Person Person::Seated(const PersonLook& look, const Eigen::Vector2d& seat, doubl
   return p;
 }
 
-void Person::Place(double t, Eigen::Vector2d* xy, double* heading) const {
-  if (seated_) {
-    *xy = seat_;
-    *heading = heading_;
-    return;
-  }
+void Person::PathAt(double s, Eigen::Vector2d* xy, double* heading) const {
   const double total = cumulative_.back();
   auto at = [&](double s) {
     s = std::fmod(s, total);
@@ -161,7 +170,6 @@ void Person::Place(double t, Eigen::Vector2d* xy, double* heading) const {
     const double len = cumulative_[k + 1] - cumulative_[k];
     return Eigen::Vector2d(a + (b - a) * (len > 0 ? (s - cumulative_[k]) / len : 0.0));
   };
-  const double s = start_m_ + speed_ * t;
   // Cut corners: position and heading come from points 0.3 m behind and ahead, so turns are
   // smooth instead of instantaneous.
   const Eigen::Vector2d behind = at(s - 0.3), ahead = at(s + 0.3);
@@ -170,7 +178,32 @@ void Person::Place(double t, Eigen::Vector2d* xy, double* heading) const {
   *heading = std::atan2(d.y(), d.x());
 }
 
+void Person::Place(double t, Eigen::Vector2d* xy, double* heading) const {
+  if (seated_) {
+    *xy = seat_;
+    *heading = heading_;
+    return;
+  }
+  PathAt(start_m_ + speed_ * t, xy, heading);
+}
+
+BodyPose Person::PoseAt(double t) const {
+  MOSLAM_CHECK(body_ != nullptr);
+  const Skeleton& sk = body_->skeleton();
+  if (seated_) return SeatedPose(sk, seat_, heading_, seat_height_, phase_ + t);
+  const PathFunction path = [this](double s, Eigen::Vector2d* xy, double* heading) {
+    PathAt(s, xy, heading);
+  };
+  return WalkingPose(sk, path, start_m_ + speed_ * t, StrideLength(look_.shape.height_m, speed_),
+                     10 * kDeg * std::sin(0.4 * t + start_m_));
+}
+
+void Person::AppendMeshes(double t, uint16_t instance, std::vector<Mesh>* meshes) const {
+  if (body_) meshes->push_back(body_->Skin(PoseAt(t), kPerson, instance));
+}
+
 void Person::AppendBoxes(double t, uint16_t instance, std::vector<Box>* boxes) const {
+  if (body_) return;
   Eigen::Vector2d xy;
   double heading = 0.0;
   Place(t, &xy, &heading);
@@ -244,6 +277,16 @@ void Actor::AppendBoxes(double t, std::vector<Box>* boxes) const {
   }
 }
 
+void Actor::AppendMeshes(double t, std::vector<Mesh>* meshes) const {
+  if (is_person) person.AppendMeshes(t, instance, meshes);
+}
+
+std::vector<Mesh> World::MeshesAt(double t) const {
+  std::vector<Mesh> meshes;
+  for (const Actor& a : actors) a.AppendMeshes(t, &meshes);
+  return meshes;
+}
+
 std::vector<Box> World::BoxesAt(double t) const {
   std::vector<Box> boxes = static_boxes;
   for (const Actor& a : actors) a.AppendBoxes(t, &boxes);
@@ -263,6 +306,16 @@ std::vector<uint16_t> World::MovingInstances(double t, double dt) const {
         const Vector3d local = corner.cwiseProduct(now[i].half);
         max_shift = std::max(max_shift,
                              (now[i].T_world_box * local - before[i].T_world_box * local).norm());
+      }
+    }
+    std::vector<Mesh> mesh_now, mesh_before;
+    a.AppendMeshes(t, &mesh_now);
+    a.AppendMeshes(t - dt, &mesh_before);
+    for (size_t m = 0; m < mesh_now.size() && m < mesh_before.size(); ++m) {
+      const auto& vn = mesh_now[m].vertices;
+      const auto& vb = mesh_before[m].vertices;
+      for (size_t i = 0; i < vn.size() && i < vb.size(); ++i) {
+        max_shift = std::max(max_shift, static_cast<double>((vn[i].p - vb[i].p).norm()));
       }
     }
     if (max_shift > 5e-4) moving.push_back(a.instance);

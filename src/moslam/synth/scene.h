@@ -1,14 +1,17 @@
-// What a synthetic scene is made of: textured boxes. Rooms, furniture, people and cars are all
-// built from oriented boxes; a person is a set of limb boxes whose poses change with time.
+// What a synthetic scene is made of: textured boxes and skinned meshes. Rooms, furniture and cars
+// are built from oriented boxes; a person is either a set of limb boxes whose poses change with
+// time or a skinned body (body.h, gait.h).
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "moslam/geometry/se3.h"
+#include "moslam/synth/body.h"
 
 namespace moslam::synth {
 
@@ -40,11 +43,20 @@ struct Box {
   uint16_t instance = 0;  // 0: no instance (background)
 };
 
-// Textures of one person's clothes and skin (indices into the TextureSet).
+// Textures of one person's clothes and skin (indices into the TextureSet). With `body` set the
+// person is a skinned mesh (body.h) of `shape` instead of boxes.
 struct PersonLook {
   int shirt = 0, trousers = 0, skin = 0, hair = 0, shoes = 0;
   double height_m = 1.75;
+  bool body = false;
+  BodyShape shape;
 };
+
+// How people are drawn: boxes (the original figures) or skinned bodies (issue 25).
+enum class PeopleStyle { kBoxes, kBodies };
+// "boxes" / "bodies"; ParsePeopleStyle throws InputError on anything else.
+const char* PeopleStyleName(PeopleStyle style);
+PeopleStyle ParsePeopleStyle(const std::string& name);
 
 // An articulated figure: head, hair, torso, upper and lower arms and legs, hands and feet, each a
 // box hinged at its joint. Walking figures follow a closed path at constant speed with a gait
@@ -60,14 +72,22 @@ class Person {
   static Person Seated(const PersonLook& look, const Eigen::Vector2d& seat, double heading,
                        double seat_height, double phase);
 
-  // The figure's boxes at time t (seconds), labelled kPerson / instance.
+  // The figure's boxes at time t (seconds), labelled kPerson / instance; none for a body.
   void AppendBoxes(double t, uint16_t instance, std::vector<Box>* boxes) const;
+  // The body's mesh at time t; nothing for a box figure.
+  void AppendMeshes(double t, uint16_t instance, std::vector<Mesh>* meshes) const;
+  // The body's skeleton at time t (a body only).
+  BodyPose PoseAt(double t) const;
   bool seated() const { return seated_; }
+  const BodyModel* body() const { return body_.get(); }
 
  private:
   // Ground position and heading at time t.
   void Place(double t, Eigen::Vector2d* xy, double* heading) const;
+  // ... at arc length s along the path (corners cut).
+  void PathAt(double s, Eigen::Vector2d* xy, double* heading) const;
   PersonLook look_;
+  std::shared_ptr<const BodyModel> body_;  // null: boxes
   bool seated_ = false;
   std::vector<Eigen::Vector2d> path_;
   std::vector<double> cumulative_;  // path length at each waypoint (closed: one more entry)
@@ -94,6 +114,7 @@ struct Actor {
   Person person = Person::Seated({}, Eigen::Vector2d::Zero(), 0.0, 0.48, 0.0);
   Car car;
   void AppendBoxes(double t, std::vector<Box>* boxes) const;
+  void AppendMeshes(double t, std::vector<Mesh>* meshes) const;
 };
 
 // A scene: static boxes and actors.
@@ -104,6 +125,8 @@ struct World {
 
   // All boxes at time t.
   std::vector<Box> BoxesAt(double t) const;
+  // All meshes (skinned people) at time t.
+  std::vector<Mesh> MeshesAt(double t) const;
   // Instance ids of actors whose boxes moved by more than 0.5 mm between t - dt and t: these
   // pixels are "moving" in the frame at t.
   std::vector<uint16_t> MovingInstances(double t, double dt) const;

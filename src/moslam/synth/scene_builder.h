@@ -3,9 +3,11 @@
 // people and cars to a World. Internal to the synth module.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -167,6 +169,13 @@ class Builder {
         kBackground, 0);
   }
 
+  // How Look() dresses people; bodies draw their shapes from a stream of their own, so a preset
+  // has the same room, paths and camera with either style.
+  void SetPeopleStyle(PeopleStyle style, uint64_t seed) {
+    style_ = style;
+    body_rng_ = Rng(seed, 0xB0D1E5ULL);
+  }
+
   PersonLook Look() {
     PersonLook look;
     look.shirt = Pick(rng_, tex_, TextureKind::kClothing);
@@ -175,6 +184,75 @@ class Builder {
     look.hair = Pick(rng_, tex_, TextureKind::kHair);
     look.shoes = Pick(rng_, tex_, TextureKind::kHair);
     look.height_m = rng_.Uniform(1.6, 1.9);
+    if (style_ == PeopleStyle::kBodies) look = BodyLook(look);
+    return look;
+  }
+
+  // A procedural texture of a kind (never a photograph), from the body stream.
+  int ProceduralPick(Rng& r, TextureKind kind) const {
+    std::vector<int> list;
+    for (int i : tex_.OfKind(kind)) {
+      if (tex_.textures()[static_cast<size_t>(i)].name.rfind("procedural:", 0) == 0) {
+        list.push_back(i);
+      }
+    }
+    if (list.empty()) return -1;
+    return list[static_cast<size_t>(r.Index(static_cast<int>(list.size())))];
+  }
+
+  // A body of anthropometric proportions (heights of adults: about N(1.77, 0.07) m for men and
+  // N(1.63, 0.07) m for women, cut to 1.5-1.95 m), a skin tone from light to dark, hair, clothes.
+  PersonLook BodyLook(PersonLook look) {
+    Rng& r = body_rng_;
+    BodyShape& b = look.shape;
+    look.body = true;
+    b.female = r.Uniform() < 0.5;
+    b.height_m = std::clamp(r.Normal(b.female ? 1.63 : 1.77, 0.07), 1.5, 1.95);
+    look.height_m = b.height_m;
+    b.build = std::clamp(r.Normal(0.45, 0.25), 0.0, 1.0);
+    static const float kSkin[6][3] = {{0.96f, 0.8f, 0.69f},  {0.92f, 0.72f, 0.58f},
+                                      {0.8f, 0.6f, 0.45f},   {0.66f, 0.46f, 0.32f},
+                                      {0.48f, 0.32f, 0.22f}, {0.33f, 0.22f, 0.15f}};
+    static const float kHair[6][3] = {{0.06f, 0.05f, 0.045f}, {0.18f, 0.12f, 0.08f},
+                                      {0.35f, 0.23f, 0.13f},  {0.72f, 0.58f, 0.36f},
+                                      {0.55f, 0.53f, 0.5f},   {0.5f, 0.22f, 0.1f}};
+    const auto* skin = kSkin[r.Index(6)];
+    const auto* hair = kHair[r.Uniform() < 0.45 ? 0 : r.Index(6)];
+    b.skin = Eigen::Vector3f(skin[0], skin[1], skin[2]);
+    b.hair = Eigen::Vector3f(hair[0], hair[1], hair[2]);
+    b.long_hair = r.Uniform() < (b.female ? 0.7 : 0.08);
+    b.skirt = b.female && r.Uniform() < 0.35;
+    b.short_sleeves = r.Uniform() < 0.4;
+    // Clothes as people wear them: plain colours or the procedural cloth patterns (plaid,
+    // stripes, weave) in garment colours; photographs (street scenes) make no shirt.
+    static const float kGarment[10][3] = {
+        {0.92f, 0.92f, 0.9f},  {0.1f, 0.1f, 0.11f},  {0.15f, 0.2f, 0.38f},  {0.5f, 0.5f, 0.52f},
+        {0.62f, 0.12f, 0.12f}, {0.2f, 0.38f, 0.24f}, {0.76f, 0.68f, 0.52f}, {0.5f, 0.65f, 0.85f},
+        {0.85f, 0.55f, 0.2f},  {0.45f, 0.25f, 0.45f}};
+    static const float kLegwear[5][3] = {{0.18f, 0.25f, 0.42f},
+                                         {0.1f, 0.1f, 0.1f},
+                                         {0.4f, 0.4f, 0.42f},
+                                         {0.6f, 0.52f, 0.38f},
+                                         {0.28f, 0.22f, 0.16f}};
+    auto colour = [](const float* c, Rng& rng) {
+      const float k = static_cast<float>(rng.Uniform(0.85, 1.1));
+      return Eigen::Vector3f(std::min(1.f, c[0] * k), std::min(1.f, c[1] * k),
+                             std::min(1.f, c[2] * k));
+    };
+    const float* shirt = kGarment[r.Index(10)];
+    b.shirt_colour = colour(shirt, r);
+    b.shirt = r.Uniform() < 0.7 ? -2 : ProceduralPick(r, TextureKind::kClothing);
+    // A pattern keeps a little of the garment colour: the procedural prints are loud.
+    if (b.shirt >= 0) b.shirt_colour = b.shirt_colour * 0.3f + Eigen::Vector3f::Constant(0.6f);
+    const float* legs = kLegwear[r.Index(5)];
+    b.trousers_colour = colour(legs, r);
+    b.trousers = r.Uniform() < 0.6 ? ProceduralPick(r, TextureKind::kTrousers) : -2;
+    if (b.trousers >= 0) {
+      b.trousers_colour = b.trousers_colour * 0.6f + Eigen::Vector3f::Constant(0.5f);
+    }
+    if (b.skirt) b.trousers_colour = colour(kGarment[r.Index(10)], r);
+    b.shoes = -1;
+    b.shoes_colour = Eigen::Vector3f::Constant(static_cast<float>(r.Uniform(0.05, 0.3)));
     return look;
   }
 
@@ -202,6 +280,8 @@ class Builder {
  private:
   World& world_;
   Rng& rng_;
+  PeopleStyle style_ = PeopleStyle::kBoxes;
+  Rng body_rng_{0};
   const TextureSet& tex_;
 };
 

@@ -21,31 +21,55 @@ void BM_ProceduralTextures(benchmark::State& state) {
 }
 BENCHMARK(BM_ProceduralTextures)->Unit(benchmark::kMillisecond);
 
-// Rendering only (GL draw + read-back of colour, depth and ids).
+PeopleStyle Style(const benchmark::State& state) {
+  return state.range(0) == 0 ? PeopleStyle::kBoxes : PeopleStyle::kBodies;
+}
+
+// Rendering only (GL draw + read-back of colour, depth and ids). Arg: people as boxes (0) or
+// skinned bodies (1; posing and skinning included).
 void BM_RenderOnly(benchmark::State& state) {
-  const SequenceSpec spec = MakePreset("w_xyz", 1, Textures());
+  const SequenceSpec spec = MakePreset("w_xyz", 1, Textures(), 0, 0, Style(state));
   Renderer renderer(640, 480, Textures());
   RenderOutput out;
   int i = 0;
   for (auto _ : state) {
     const double t = (i++ % 300) / 30.0;
-    renderer.Render(spec.world.BoxesAt(t), spec.camera, spec.T_world_cam(t).Inverse(),
-                    spec.lighting, &out);
+    renderer.Render(spec.world.BoxesAt(t), spec.world.MeshesAt(t), spec.camera,
+                    spec.T_world_cam(t).Inverse(), spec.lighting, &out);
   }
   state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_RenderOnly)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_RenderOnly)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 
-// A full frame: render, sensor noise, labels (no files).
+// A full frame: render, sensor noise, labels (no files). Arg as BM_RenderOnly.
 void BM_RenderFrame(benchmark::State& state) {
-  const SequenceSpec spec = MakePreset("w_xyz", 1, Textures());
+  const SequenceSpec spec = MakePreset("w_xyz", 1, Textures(), 0, 0, Style(state));
   Renderer renderer(640, 480, Textures());
   GeneratorOptions options;
   int i = 0;
   for (auto _ : state) benchmark::DoNotOptimize(RenderFrame(spec, renderer, i++ % 300, options));
   state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_RenderFrame)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_RenderFrame)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
+// Posing and skinning one walking body (gait.h, body.h).
+void BM_PoseAndSkinBody(benchmark::State& state) {
+  const SequenceSpec spec = MakePreset("w_xyz", 1, Textures(), 0, 0, PeopleStyle::kBodies);
+  int i = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(spec.world.MeshesAt((i++ % 300) / 30.0));
+  state.counters["bodies"] = static_cast<double>(spec.world.actors.size());
+}
+BENCHMARK(BM_PoseAndSkinBody)->Unit(benchmark::kMicrosecond);
 
 // Render and write: the whole `moslam synth` pipeline (writer thread, PNG level 1) for 60 frames.
 void BM_RenderAndWrite(benchmark::State& state) {

@@ -352,4 +352,21 @@ void TextureSet::Add(Texture texture) {
   textures_.push_back(std::move(texture));
 }
 
+cv::Mat MakeFabricTexture(int size) {
+  // Plain cloth: soft folds (low-frequency noise stretched along the garment) and a faint weave,
+  // between 0.8 and 1 so that it only shades the garment's colour.
+  Rng rng(0xFAB1C, 1);
+  const cv::Mat folds = Fractal(rng, size, 4, 3, 0.5f);
+  const cv::Mat weave = Fractal(rng, size, std::min(size, 64), 2, 0.5f);
+  cv::Mat out(size, size, CV_8UC3);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      const float f = folds.at<float>(y, x), w = weave.at<float>(y, x);
+      const float v = 0.8f + 0.16f * f + 0.04f * w;
+      out.at<cv::Vec3b>(y, x) = cv::Vec3b::all(cv::saturate_cast<uchar>(255.0f * v));
+    }
+  }
+  return out;
+}
+
 }  // namespace moslam::synth

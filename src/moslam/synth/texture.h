@@ -62,6 +62,10 @@ class TextureSet {
       std::vector<std::vector<int>>(static_cast<size_t>(TextureKind::kCount));
 };
 
+// Plain cloth for garments without a pattern: grey folds and weave in [0.8, 1] that the garment's
+// colour multiplies (the renderer's texture -2 for meshes).
+cv::Mat MakeFabricTexture(int size);
+
 // One procedural texture (exposed for tests).
 cv::Mat MakeProceduralTexture(TextureKind kind, uint64_t seed, int size);
 
