@@ -55,6 +55,9 @@ struct RunArgs {
   bool no_movable_evidence = false;
   bool free_space_check = false;
   bool no_moving_check = false;
+  bool no_static_scores = false;
+  bool no_moving_regions = false;
+  bool no_pose_consensus = false;
   int mask_margin = slam::SystemOptions{}.mask_margin_px;
   int mask_propagation = slam::SystemOptions{}.mask_propagation_frames;
   int mask_completion = slam::SystemOptions{}.mask_completion_px;
@@ -112,6 +115,9 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.movable_evidence = !args.no_movable_evidence;
   options.free_space_evidence = args.free_space_check;
   options.moving_keypoint_check = !args.no_moving_check;
+  options.static_scores = !args.no_static_scores;
+  options.moving_regions = !args.no_moving_regions;
+  options.pose_consensus = !args.no_pose_consensus;
   options.mask_margin_px = args.mask_margin;
   options.mask_propagation_frames = args.mask_propagation;
   options.mask_completion_px = args.mask_completion;
@@ -309,6 +315,16 @@ void AddRunCommand(CLI::App& app) {
                     "depth edges)");
   command->add_flag("--no-moving-check", args->no_moving_check,
                     "Let keyframe keypoints seen moving against 3 frames back seed map points "
+                    "(ablations)");
+  command->add_flag("--no-static-scores", args->no_static_scores,
+                    "Give every matched map point full weight in pose optimization and keep "
+                    "points whose residuals show them moving frame after frame (ablations)");
+  command->add_flag("--no-moving-regions", args->no_moving_regions,
+                    "Do not turn clusters of keypoints found moving into mask regions carried "
+                    "into the next frames (ablations)");
+  command->add_flag("--no-pose-consensus", args->no_pose_consensus,
+                    "Stereo/RGB-D: optimize each frame's pose from all its matches by least "
+                    "squares alone, without first finding by counting which of them agree "
                     "(ablations)");
   command
       ->add_option("--mask-margin", args->mask_margin,

@@ -49,11 +49,12 @@ std::unique_ptr<ceres::CostFunction> MakePoseCost(const CameraModel& camera,
 int Classify(const CameraModel& camera, const geometry::SE3& T_cam_world,
              const std::vector<Eigen::Vector3d>& points_world,
              const std::vector<Observation>& observations, const PoseOptimizerOptions& options,
-             std::vector<bool>* inlier, double* cost) {
+             std::vector<bool>* inlier, double* cost, std::vector<double>* chi2_out = nullptr) {
   int count = 0;
   *cost = 0.0;
   for (size_t i = 0; i < observations.size(); ++i) {
     const double chi2 = ChiSquare(camera, observations[i], T_cam_world * points_world[i]);
+    if (chi2_out) (*chi2_out)[i] = chi2;
     const bool in = chi2 <= Chi2Threshold(observations[i], options.chi2_mono, options.chi2_stereo);
     (*inlier)[i] = in;
     if (in) {
@@ -70,17 +71,22 @@ PoseOptimizerResult OptimizePose(const CameraModel& camera, const geometry::SE3&
                                  const std::vector<Eigen::Vector3d>& points_world,
                                  const std::vector<Observation>& observations,
                                  const PoseOptimizerOptions& options,
-                                 const std::vector<bool>& initial_outlier) {
+                                 const std::vector<bool>& initial_outlier,
+                                 const std::vector<double>& weights) {
   options.Check();
   const size_t n = observations.size();
   MOSLAM_CHECK_EQ(points_world.size(), n);
   MOSLAM_CHECK(initial_outlier.empty() || initial_outlier.size() == n)
       << "initial_outlier has " << initial_outlier.size() << " flags for " << n << " observations";
+  MOSLAM_CHECK(weights.empty() || weights.size() == n)
+      << "weights has " << weights.size() << " entries for " << n << " observations";
+  for (double w : weights) MOSLAM_CHECK(w > 0.0 && w <= 1.0) << "weight " << w;
   CheckCameraAndObservations(camera, observations);
 
   PoseOptimizerResult result;
   result.T_cam_world = T_cam_world_init;
   result.inlier.assign(n, false);
+  result.chi2.assign(n, 0.0);
   if (n < 3) return result;
 
   std::vector<bool> inlier(n);
@@ -95,6 +101,20 @@ PoseOptimizerResult OptimizePose(const CameraModel& camera, const geometry::SE3&
   for (size_t i = 0; i < n; ++i) costs[i] = MakePoseCost(camera, observations[i], points_world[i]);
   ceres::HuberLoss huber_mono(std::sqrt(options.chi2_mono));
   ceres::HuberLoss huber_stereo(std::sqrt(options.chi2_stereo));
+  // Weighted observations: w * rho(s), robust or not (ScaledLoss of no loss is w * s).
+  std::vector<std::unique_ptr<ceres::LossFunction>> scaled_robust, scaled_plain;
+  if (!weights.empty()) {
+    scaled_robust.resize(n);
+    scaled_plain.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      if (weights[i] == 1.0) continue;
+      ceres::LossFunction* huber = observations[i].is_stereo() ? &huber_stereo : &huber_mono;
+      scaled_robust[i] =
+          std::make_unique<ceres::ScaledLoss>(huber, weights[i], ceres::DO_NOT_TAKE_OWNERSHIP);
+      scaled_plain[i] =
+          std::make_unique<ceres::ScaledLoss>(nullptr, weights[i], ceres::DO_NOT_TAKE_OWNERSHIP);
+    }
+  }
   SE3LeftManifold manifold;
 
   std::array<double, kPoseSize> pose;
@@ -117,6 +137,9 @@ PoseOptimizerResult OptimizePose(const CameraModel& camera, const geometry::SE3&
       if (!inlier[i]) continue;
       ceres::LossFunction* loss = nullptr;
       if (robust) loss = observations[i].is_stereo() ? &huber_stereo : &huber_mono;
+      if (!weights.empty() && weights[i] != 1.0) {
+        loss = robust ? scaled_robust[i].get() : scaled_plain[i].get();
+      }
       problem.AddResidualBlock(costs[i].get(), loss, pose.data());
       ++active;
     }
@@ -136,7 +159,7 @@ PoseOptimizerResult OptimizePose(const CameraModel& camera, const geometry::SE3&
   // Bitwise unchanged when nothing was optimized (no round had an inlier).
   if (solved) result.T_cam_world = UnpackPose(pose.data());
   result.num_inliers = Classify(camera, result.T_cam_world, points_world, observations, options,
-                                &result.inlier, &result.final_cost);
+                                &result.inlier, &result.final_cost, &result.chi2);
   return result;
 }
 

@@ -31,18 +31,23 @@ struct PoseOptimizerOptions {
 struct PoseOptimizerResult {
   geometry::SE3 T_cam_world;  // refined pose
   std::vector<bool> inlier;   // per observation, after the last round
+  std::vector<double> chi2;   // per observation: whitened squared error at the final pose
   int num_inliers = 0;
   double final_cost = 0.0;  // 0.5 * sum of squared whitened residuals of the inliers
 };
 
 // points_world[i] is observed as observations[i]. `initial_outlier` (empty or one flag per
-// observation) marks observations to start as outliers. Fewer than 3 observations: returned
-// unchanged with every observation an outlier (an expected failure, not an error). Size mismatch
-// is a broken invariant (CHECK).
+// observation) marks observations to start as outliers. `weights` (empty or one per observation,
+// each in (0, 1]) scale each observation's robust cost: a point believed to move (a low static
+// probability, slam/static_scores.h; CFP-SLAM, Hu et al. 2022) pulls the pose less. Weights do not
+// change the chi-square classification, which stays on the unweighted error. Fewer than 3
+// observations: returned unchanged with every observation an outlier (an expected failure, not an
+// error). Size mismatch or a weight outside (0, 1] is a broken invariant (CHECK).
 PoseOptimizerResult OptimizePose(const CameraModel& camera, const geometry::SE3& T_cam_world_init,
                                  const std::vector<Eigen::Vector3d>& points_world,
                                  const std::vector<Observation>& observations,
                                  const PoseOptimizerOptions& options = {},
-                                 const std::vector<bool>& initial_outlier = {});
+                                 const std::vector<bool>& initial_outlier = {},
+                                 const std::vector<double>& weights = {});
 
 }  // namespace moslam::optim

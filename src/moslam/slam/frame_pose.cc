@@ -4,13 +4,8 @@
 
 namespace moslam::slam {
 
-optim::PoseOptimizerResult OptimizeFramePose(const optim::CameraModel& camera,
-                                             const feature::Frame& frame,
-                                             const std::vector<size_t>& indices,
-                                             const std::vector<Eigen::Vector3d>& points_world,
-                                             const geometry::SE3& T_cam_world_init,
-                                             int num_threads) {
-  MOSLAM_CHECK(indices.size() == points_world.size());
+std::vector<optim::Observation> FrameObservations(const feature::Frame& frame,
+                                                  const std::vector<size_t>& indices) {
   std::vector<optim::Observation> observations;
   observations.reserve(indices.size());
   for (size_t i : indices) {
@@ -21,9 +16,21 @@ optim::PoseOptimizerResult OptimizeFramePose(const optim::CameraModel& camera,
     obs.inv_sigma2 = frame.inv_level_sigma2[kp.octave];
     observations.push_back(obs);
   }
+  return observations;
+}
+
+optim::PoseOptimizerResult OptimizeFramePose(const optim::CameraModel& camera,
+                                             const feature::Frame& frame,
+                                             const std::vector<size_t>& indices,
+                                             const std::vector<Eigen::Vector3d>& points_world,
+                                             const geometry::SE3& T_cam_world_init, int num_threads,
+                                             const std::vector<double>& weights,
+                                             const std::vector<bool>& initial_outlier) {
+  MOSLAM_CHECK(indices.size() == points_world.size());
   optim::PoseOptimizerOptions options;
   options.num_threads = num_threads;
-  return optim::OptimizePose(camera, T_cam_world_init, points_world, observations, options);
+  return optim::OptimizePose(camera, T_cam_world_init, points_world,
+                             FrameObservations(frame, indices), options, initial_outlier, weights);
 }
 
 }  // namespace moslam::slam

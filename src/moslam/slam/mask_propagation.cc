@@ -60,6 +60,13 @@ cv::Mat MaskPropagator::MaskFor(const cv::Mat& network, const cv::Size& size,
   return mask;
 }
 
+void MaskPropagator::AddRegion(const cv::Mat& region) {
+  MOSLAM_CHECK(region.type() == CV_8UC1);
+  if (pending_ages_.empty()) pending_ages_ = cv::Mat::zeros(region.size(), CV_8UC1);
+  MOSLAM_CHECK(region.size() == pending_ages_.size());
+  pending_ages_.setTo(1, region != 0);
+}
+
 void MaskPropagator::Commit(const cv::Mat& depth) {
   last_ages_ = pending_ages_;
   last_depth_ = depth;

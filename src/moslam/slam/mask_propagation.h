@@ -38,6 +38,10 @@ class MaskPropagator {
   // Empty when no pixel is movable. Held until Commit().
   cv::Mat MaskFor(const cv::Mat& network, const cv::Size& size,
                   const std::optional<geometry::SE3>& T_cur_last);
+  // Adds `region` (CV_8UC1 of the frame's size, non-zero = movable) to the mask of the frame
+  // MaskFor was last called for, as the network's own pixels (age 1), so that it is carried into
+  // the next frames: regions found after the frame was extracted (slam/moving_regions.h).
+  void AddRegion(const cv::Mat& region);
   // The frame MaskFor was called for is done: its mask (with ages) and `depth` (CV_32FC1 metres
   // or empty) are what the next frame's mask is carried from.
   void Commit(const cv::Mat& depth);

@@ -1,7 +1,9 @@
 // What the movable-object mechanisms of issue 24 cost per tracked frame at 640x480 (a body
 // covering a fifth of the view, a local map of 2000 points), against the budget of 3 ms:
 // propagation (the warp with depth, the fade and growth), depth completion, the border flags of
-// 1000 keypoints, judging the local map's points, and (per keyframe) the moving-keypoint check.
+// 1000 keypoints, judging the local map's points, the static scores of 400 matched points, the
+// mask regions of 120 inconsistent keypoints, the pose optimization with and without weights,
+// and (per keyframe) the moving-keypoint check.
 // bench_slam
 #include <random>
 #include <vector>
@@ -9,9 +11,12 @@
 #include <benchmark/benchmark.h>
 
 #include "moslam/feature/movable_mask.h"
+#include "moslam/optim/pose_optimizer.h"
 #include "moslam/slam/mask_propagation.h"
 #include "moslam/slam/movable_points.h"
 #include "moslam/slam/moving_keypoints.h"
+#include "moslam/slam/moving_regions.h"
+#include "moslam/slam/static_scores.h"
 #include "moslam/slam/test_scene.h"
 
 namespace moslam::slam {
@@ -94,6 +99,67 @@ void BM_MovingKeypoints(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_MovingKeypoints)->Unit(benchmark::kMillisecond);
+
+// Per frame: the residuals of 400 matched points update their scores (the tracker's
+// JudgeResiduals without the map), a quarter of them moving.
+void BM_StaticScores(benchmark::State& state) {
+  map::Map map;
+  const testing::Scene scene = testing::RandomScene(400, 5);
+  const auto kf = testing::ObserveScene(&map, scene, geometry::SE3());
+  std::vector<std::shared_ptr<map::MapPoint>> points;
+  for (const auto& x : scene.points) points.push_back(map.CreateMapPoint(x, kf));
+  StaticScores scores;
+  for (auto _ : state) {
+    double sum = 0.0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      sum += scores.Observe(points[i], i % 4 == 0 ? 3.0 : 40.0, optim::kChi2Stereo);
+      sum += scores.Weight(points[i]->id) + scores.ShouldCull(points[i]->id);
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+}
+BENCHMARK(BM_StaticScores)->Unit(benchmark::kMillisecond);
+
+// 120 inconsistent keypoints: 100 on the body of Scene (one cluster), 20 scattered.
+void BM_MovingRegions(benchmark::State& state) {
+  const Scene scene;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> bu(255.f, 405.f), bv(65.f, 435.f), u(0.f, 639.f),
+      v(0.f, 479.f);
+  std::vector<InconsistentKeypoint> keypoints;
+  for (int i = 0; i < 100; ++i) keypoints.push_back({cv::Point2f(bu(rng), bv(rng)), 2.0f});
+  for (int i = 0; i < 20; ++i) keypoints.push_back({cv::Point2f(u(rng), v(rng)), 3.5f});
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        MovingRegions(keypoints, scene.depth, scene.depth.size(), MovingRegionOptions{}));
+  }
+}
+BENCHMARK(BM_MovingRegions)->Unit(benchmark::kMillisecond);
+
+// The tracker's pose optimization of 400 stereo matches, unweighted (Arg 0) and with a quarter of
+// them weighted down (Arg 1): what the weights add.
+void BM_PoseWithWeights(benchmark::State& state) {
+  const testing::Scene scene = testing::RandomScene(400, 6);
+  const optim::CameraModel model{535.4, 539.2, 320.1, 247.6, 40.0};
+  std::vector<optim::Observation> observations;
+  for (const auto& x : scene.points) {
+    optim::Observation o;
+    o.pixel = Eigen::Vector2d(model.fx * x.x() / x.z() + model.cx + 0.3,
+                              model.fy * x.y() / x.z() + model.cy - 0.2);
+    o.u_right = o.pixel.x() - model.bf / x.z();
+    observations.push_back(o);
+  }
+  std::vector<double> weights;
+  if (state.range(0) == 1) {
+    for (size_t i = 0; i < observations.size(); ++i) weights.push_back(i % 4 == 0 ? 0.1 : 1.0);
+  }
+  const geometry::SE3 start = testing::CameraAt(0.01);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        optim::OptimizePose(model, start, scene.points, observations, {}, {}, weights));
+  }
+}
+BENCHMARK(BM_PoseWithWeights)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace moslam::slam

@@ -26,6 +26,7 @@
 #include "moslam/slam/local_mapper.h"
 #include "moslam/slam/loop_closer.h"
 #include "moslam/slam/mask_propagation.h"
+#include "moslam/slam/moving_regions.h"
 #include "moslam/slam/tracker.h"
 #include "moslam/util/bounded_queue.h"
 #include "moslam/util/error.h"
@@ -184,6 +185,8 @@ class System::Impl : public KeyFrameSink {
     // it flagged static points and cost a second relocalization in slam/relocalization), and
     // monocular keypoints have none.
     t.moving.enabled = o.moving_keypoint_check && o.sensor == io::SensorType::kRgbD;
+    t.static_scores.enabled = o.static_scores;
+    t.pose_consensus = o.pose_consensus;
     return t;
   }
 
@@ -219,9 +222,10 @@ class System::Impl : public KeyFrameSink {
     // good enough to keep the extractor off a body, but they also cover the static surface a
     // body has just left or stands on, at the same depth, and would erase it.
     const TrackOutcome outcome = tracker_.Track(std::move(frame), {input.mask, input.depth});
+    report.moving_region_fraction = AddMovingRegions(outcome, input);
     FollowPose(outcome, input);
-    report.movable_points_erased = outcome.movable.erased;
-    movable_points_erased_ += outcome.movable.erased;
+    report.movable_points_erased = outcome.movable.erased + outcome.residual_erased;
+    movable_points_erased_ += report.movable_points_erased;
     if (outcome.status == TrackStatus::kInitialized) initialized_frame_ = frame_index_;
     ++frame_index_;
     report.reason = outcome.reason;
@@ -340,6 +344,18 @@ class System::Impl : public KeyFrameSink {
       mask = feature::CompleteMaskByDepth(mask, input.depth, completion);
     }
     return mask;
+  }
+
+  // Regions around clusters of keypoints the tracker found inconsistent (moving_regions.h),
+  // handed to the propagator, which carries them into the next frames; returns the share of the
+  // image they cover.
+  float AddMovingRegions(const TrackOutcome& outcome, const FrameInput& input) {
+    if (!options_.moving_regions || !propagator_ || outcome.inconsistent.empty()) return 0.0f;
+    const cv::Mat regions =
+        MovingRegions(outcome.inconsistent, input.depth, input.image.size(), MovingRegionOptions{});
+    if (regions.empty()) return 0.0f;
+    propagator_->AddRegion(regions);
+    return static_cast<float>(cv::countNonZero(regions)) / static_cast<float>(regions.total());
   }
 
   // The motion the next frame's mask is carried with: the last frame-to-frame velocity.

@@ -87,6 +87,18 @@ struct SystemOptions {
   // RGB-D: masks grown over the depth-connected surface they cover, up to this many pixels
   // (feature::CompleteMaskByDepth); 0: off.
   int mask_completion_px = 12;
+  // Geometry for what no network knows (issue 24): each map point's static probability from its
+  // residuals across frames weights pose optimization, and points judged moving are erased
+  // (slam/static_scores.h; moslam run --no-static-scores) ...
+  bool static_scores = true;
+  // ... and clusters of keypoints found inconsistent with the camera's motion become mask
+  // regions carried into the next frames like a network's (slam/moving_regions.h; needs
+  // mask_propagation_frames > 0; moslam run --no-moving-regions).
+  bool moving_regions = true;
+  // Stereo / RGB-D: the matches that agree on each frame's pose are found by counting before it is
+  // optimized (optim/pose_consensus.h), so a close moving object cannot take the camera along
+  // (moslam run --no-pose-consensus).
+  bool pose_consensus = true;
   void Check() const;  // InputError naming the field
 };
 
@@ -120,9 +132,11 @@ struct FrameReport {
   int num_matches = 0;   // matches from motion-model / reference-keyframe tracking
   int num_inliers = 0;   // map points tracked after local-map pose optimization
   bool new_keyframe = false;
-  bool relocalized = false;       // the pose came from relocalization after tracking was lost
-  bool recovered = false;         // lost before, tracked again from the predicted pose (short loss)
-  int movable_points_erased = 0;  // map points this frame's mask or depth showed to be movable
+  bool relocalized = false;  // the pose came from relocalization after tracking was lost
+  bool recovered = false;    // lost before, tracked again from the predicted pose (short loss)
+  // map points this frame's mask, depth or residuals showed to be movable
+  int movable_points_erased = 0;
+  float moving_region_fraction = 0.0f;  // share of the image the geometric regions cover
   StageTimes times;
   std::optional<geometry::SE3> T_world_cam;  // when tracking is ok (or just initialized)
 };

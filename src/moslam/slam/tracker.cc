@@ -39,6 +39,9 @@ constexpr int kMaxLocalKeyFrames = 80;
 // Local-map inliers needed in the first max_frames_between_keyframes frames after a
 // relocalization (ORB-SLAM2's TrackLocalMap).
 constexpr int kMinInliersAfterRelocalization = 50;
+// Votes in the pose consensus: 1 + min(age, kSupportAge) / kSupportUnit, age in seconds since the
+// tracker first matched the point: from 1 (new) to 5 (known for 10 s).
+constexpr double kSupportAge = 10.0, kSupportUnit = 2.5;
 
 }  // namespace
 
@@ -48,7 +51,8 @@ Tracker::Tracker(map::Map* map, const camera::PinholeCamera& camera, double bf,
       camera_(camera),
       model_(CameraModelFor(camera, bf)),
       options_(options),
-      sink_(sink) {
+      sink_(sink),
+      static_scores_(options.static_scores) {
   MOSLAM_CHECK(map_ != nullptr && sink_ != nullptr);
   options_.Check();
 }
@@ -59,6 +63,7 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
   current_.frame = std::move(frame);
   current_.points.assign(n, nullptr);
   current_.outlier.assign(n, false);
+  current_chi2_.assign(n, 0.0);
   ++frames_since_keyframe_;
   ++frames_since_relocalization_;
 
@@ -131,7 +136,7 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
   if (ok) {
     t0 = Clock::now();
     std::lock_guard<std::mutex> lock(map_->mutex());
-    out.num_inliers = TrackLocalMap();
+    out.num_inliers = TrackLocalMap(&out);
     last_inliers_ = out.num_inliers;
     const bool recently_relocalized =
         frames_since_relocalization_ < static_cast<uint64_t>(options_.max_frames_between_keyframes);
@@ -168,7 +173,10 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
   std::shared_ptr<map::KeyFrame> keyframe;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
-    if (NeedNewKeyFrame()) keyframe = CreateKeyFrame();
+    if (NeedNewKeyFrame()) {
+      keyframe = CreateKeyFrame();
+      AppendMovingKeypoints(&out.inconsistent);
+    }
     RecordPose(true);  // reads the reference keyframe's pose: under the lock
   }
   if (keyframe) sink_->InsertKeyFrame(keyframe);
@@ -354,16 +362,45 @@ bool Tracker::Relocalize(TrackOutcome* out) {
 int Tracker::OptimizeCurrentPose() {
   std::vector<size_t> index;
   std::vector<Eigen::Vector3d> points;
+  std::vector<double> weights;
+  bool weighted = false;
   for (size_t i = 0; i < current_.points.size(); ++i) {
     if (!current_.points[i]) continue;
     index.push_back(i);
     points.push_back(current_.points[i]->position);
+    weights.push_back(static_scores_.Weight(current_.points[i]->id));
+    weighted = weighted || weights.back() < 1.0;
+  }
+  if (!weighted) weights.clear();  // all 1: the unweighted problem, bit for bit
+  geometry::SE3 start = current_.T_cam_world;
+  std::vector<bool> initial_outlier;
+  if (options_.pose_consensus && !options_.monocular) {
+    std::vector<Eigen::Vector3d> points_cam;
+    std::vector<double> support;
+    points_cam.reserve(index.size());
+    const double t = current_.frame.timestamp;
+    for (size_t i : index) {
+      const auto p = current_.frame.UnprojectCamera(i, camera_);
+      points_cam.push_back(p ? *p : Eigen::Vector3d::Constant(std::nan("")));
+      // A point known for longer votes more, up to kSupportAge seconds (pose_consensus.h).
+      const double age = static_scores_.Age(current_.points[i]->id, t);
+      support.push_back(1.0 + std::min(age, kSupportAge) / kSupportUnit);
+    }
+    const optim::PoseConsensus consensus =
+        optim::FindPoseConsensus(model_, start, points, FrameObservations(current_.frame, index),
+                                 points_cam, options_.consensus, support);
+    start = consensus.T_cam_world;
+    initial_outlier.resize(index.size());
+    for (size_t k = 0; k < index.size(); ++k) initial_outlier[k] = !consensus.inlier[k];
   }
   const optim::PoseOptimizerResult result = OptimizeFramePose(
-      model_, current_.frame, index, points, current_.T_cam_world, options_.num_threads);
+      model_, current_.frame, index, points, start, options_.num_threads, weights, initial_outlier);
   if (result.num_inliers < 3) return 0;
   current_.T_cam_world = result.T_cam_world;
-  for (size_t k = 0; k < index.size(); ++k) current_.outlier[index[k]] = !result.inlier[k];
+  for (size_t k = 0; k < index.size(); ++k) {
+    current_.outlier[index[k]] = !result.inlier[k];
+    current_chi2_[index[k]] = result.chi2[k];
+  }
   return result.num_inliers;
 }
 
@@ -381,11 +418,12 @@ int Tracker::DiscardOutliers() {
   return n;
 }
 
-int Tracker::TrackLocalMap() {
+int Tracker::TrackLocalMap(TrackOutcome* out) {
   UpdateLocalKeyFrames();
   UpdateLocalPoints();
   SearchLocalPoints();
   OptimizeCurrentPose();
+  out->residual_erased = JudgeResiduals(&out->inconsistent);
   int inliers = 0;
   for (size_t i = 0; i < current_.points.size(); ++i) {
     auto& p = current_.points[i];

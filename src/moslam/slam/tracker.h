@@ -26,11 +26,14 @@
 #include "moslam/geometry/se3.h"
 #include "moslam/map/map.h"
 #include "moslam/optim/observation.h"
+#include "moslam/optim/pose_consensus.h"
 #include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/mono_initializer.h"
 #include "moslam/slam/movable_points.h"
 #include "moslam/slam/moving_keypoints.h"
+#include "moslam/slam/moving_regions.h"
 #include "moslam/slam/relocalizer.h"
+#include "moslam/slam/static_scores.h"
 
 namespace moslam::slam {
 
@@ -76,6 +79,14 @@ struct TrackerOptions {
   // Keyframe keypoints seen moving since a few frames back seed no map point
   // (slam/moving_keypoints.h).
   MovingKeypointsOptions moving;
+  // Static probabilities of map points from their residuals (slam/static_scores.h): weights in
+  // pose optimization, and points judged moving often enough are erased.
+  StaticScoreOptions static_scores;
+  // Stereo / RGB-D: before each pose optimization the matches that agree on the pose are found by
+  // counting (optim/pose_consensus.h), so that a close object with fewer matches but more
+  // information cannot take the camera along when it moves; the optimizer starts from them.
+  bool pose_consensus = true;
+  optim::PoseConsensusOptions consensus;
   void Check() const;  // InputError naming the field
 };
 
@@ -97,6 +108,11 @@ struct TrackOutcome {
   bool relocalized = false;    // the pose came from relocalization (slam/relocalizer.h)
   bool recovered = false;      // lost before, tracked again from the predicted pose
   MovablePointsStats movable;  // map points judged (and erased) by this frame's mask and depth
+  int residual_erased = 0;     // map points erased as moving by their residuals (static_scores.h)
+  // Keypoints this frame found inconsistent with the camera's motion: matched points that
+  // static_scores.h judges moving and are outliers now, and, on a keyframe, keypoints seen
+  // moving (moving_keypoints.h). What slam/moving_regions.h grows mask regions from.
+  std::vector<InconsistentKeypoint> inconsistent;
   geometry::SE3 T_cam_world;
   double track_ms = 0.0, local_map_ms = 0.0, keyframe_ms = 0.0;
 };
@@ -154,11 +170,17 @@ class Tracker {
   int TrackFromPrediction(const geometry::SE3& predicted, float radius_scale = 1.0f);
   int OptimizeCurrentPose();
   int DiscardOutliers();
-  int TrackLocalMap();
+  int TrackLocalMap(TrackOutcome* out);
   // Movable objects (tracker_movable.cc): the local points this frame did not match, judged by
   // its mask and depth (movable_points.h); the keyframe-to-be's keypoints that moved against
   // the frame frame_gap back (moving_keypoints.h); the tracked frame kept for that check.
   MovablePointsStats JudgeLocalPoints(const FrameImages& images);
+  // The matched points' residuals after the local-map optimization update their static
+  // probabilities (static_scores.h); points judged moving are erased (returns how many) and the
+  // inconsistent keypoints collected.
+  int JudgeResiduals(std::vector<InconsistentKeypoint>* inconsistent);
+  // The keyframe-to-be's keypoints flagged moving, as inconsistent keypoints.
+  void AppendMovingKeypoints(std::vector<InconsistentKeypoint>* inconsistent) const;
   void FlagMovingKeypoints();
   void RememberFrame();
   void UpdateLocalKeyFrames();
@@ -198,6 +220,11 @@ class Tracker {
   // (MovingKeypointsOptions::frame_gap of them; cleared when tracking is lost).
   std::deque<std::pair<feature::Frame, geometry::SE3>> recent_frames_;
   const KeyFrameDatabase* database_ = nullptr;
+  StaticScores static_scores_;
+  // Per keypoint of the current frame: the chi-square error of its match after the last pose
+  // optimization (0 when unmatched).
+  std::vector<double> current_chi2_;
+  uint64_t judged_frames_ = 0;
   // Frames since the last relocalization (ORB-SLAM2's mnLastRelocFrameId); "never" at start.
   uint64_t frames_since_relocalization_ = UINT64_MAX / 2;
   // Monocular initialization: the reference frame and where its keypoints were last matched.

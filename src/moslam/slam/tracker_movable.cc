@@ -6,6 +6,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "moslam/optim/observation.h"
 #include "moslam/slam/moving_keypoints.h"
 #include "moslam/slam/tracker.h"
 
@@ -24,6 +25,52 @@ MovablePointsStats Tracker::JudgeLocalPoints(const FrameImages& images) {
   }
   return JudgeMovablePoints(map_, unmatched, {current_.T_cam_world, images.mask, images.depth},
                             camera_, options_.movable);
+}
+
+int Tracker::JudgeResiduals(std::vector<InconsistentKeypoint>* inconsistent) {
+  int matched = 0, inliers = 0;
+  for (size_t i = 0; i < current_.points.size(); ++i) {
+    if (!current_.points[i]) continue;
+    ++matched;
+    if (current_.outlier[i]) continue;
+    ++inliers;
+    // How long each point has been known (its vote in the pose consensus), scores on or off.
+    static_scores_.Seen(current_.points[i], current_.frame.timestamp);
+  }
+  if (!options_.static_scores.enabled) return 0;
+  // Residuals judge points only against a pose most matches agree with: a frame where tracking
+  // is shaky (few inliers, or as many outliers as inliers) would make static points look moving.
+  if (inliers < 2 * options_.min_inliers || 2 * inliers < matched) return 0;
+  int erased = 0;
+  const feature::Frame& f = current_.frame;
+  for (size_t i = 0; i < current_.points.size(); ++i) {
+    const std::shared_ptr<map::MapPoint> p = current_.points[i];
+    if (!p || p->bad) continue;
+    const double threshold = f.u_right[i] >= 0.0f ? optim::kChi2Stereo : optim::kChi2Mono;
+    const double probability = static_scores_.Observe(p, current_chi2_[i], threshold);
+    if (current_.outlier[i] && probability < 0.5) {
+      inconsistent->push_back({f.keypoints[i].pt, f.depth.empty() ? 0.0f : f.depth[i]});
+    }
+    if (static_scores_.ShouldCull(p->id)) {
+      map_->EraseMapPoint(p);
+      current_.points[i] = nullptr;
+      current_.outlier[i] = false;
+      ++erased;
+    }
+  }
+  // Forget the points local mapping culled or fused meanwhile.
+  if (++judged_frames_ % 100 == 0) static_scores_.Prune();
+  if (erased > 0)
+    spdlog::debug("frame at {:.3f}: {} map points erased as moving by residuals", f.timestamp,
+                  erased);
+  return erased;
+}
+
+void Tracker::AppendMovingKeypoints(std::vector<InconsistentKeypoint>* inconsistent) const {
+  const feature::Frame& f = current_.frame;
+  for (size_t i = 0; i < f.moving.size(); ++i) {
+    if (f.moving[i]) inconsistent->push_back({f.keypoints[i].pt, f.depth[i]});
+  }
 }
 
 void Tracker::FlagMovingKeypoints() {

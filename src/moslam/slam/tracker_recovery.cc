@@ -22,6 +22,8 @@ void TrackerOptions::Check() const {
   }
   movable.Check();
   moving.Check();
+  static_scores.Check();
+  consensus.Check();
 }
 
 std::optional<geometry::SE3> Tracker::RecoveryPrediction() const {

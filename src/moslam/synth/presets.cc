@@ -70,6 +70,23 @@ void BuildOffice(Builder& b, bool walking, bool seated) {
   }
 }
 
+// Issue 24's unknown mover: a cart pushed along y ~ -1 (1.3 m in front of the camera) between
+// the two side desks, stopping in the middle of the view for 2-3 s (long enough to be mapped as
+// static) and beside the view for 1-2 s. Posters on its sides: as much texture as the walls.
+void AddPushedCart(Builder& b) {
+  Rng& rng = b.rng();
+  Cart c;
+  const double y = -1.0 + rng.Uniform(-0.1, 0.1), mid = rng.Uniform(-0.15, 0.15);
+  c.stops = {{-1.35, y}, {mid, y}, {1.35, y}, {mid, y}};
+  c.dwell_s = {rng.Uniform(1, 2), rng.Uniform(2, 3), rng.Uniform(1, 2), rng.Uniform(2, 3)};
+  c.max_speed = rng.Uniform(0.6, 0.8);
+  c.side = Pick(rng, b.textures(), TextureKind::kPoster);
+  c.top = Pick(rng, b.textures(), TextureKind::kWood);
+  c.frame = Pick(rng, b.textures(), TextureKind::kHair);
+  c.size = Vector3d(rng.Uniform(1.0, 1.2), rng.Uniform(0.6, 0.75), rng.Uniform(0.9, 1.05));
+  b.AddCart(c);
+}
+
 std::function<SE3(double)> IndoorTrajectory(const std::string& name, Rng& rng) {
   // Sitting: closer, so the seated people are ~2.5 m away as in fr3 sitting_static.
   const double eye_y = name == "s_static" ? -1.0 : -2.3;
@@ -83,7 +100,7 @@ std::function<SE3(double)> IndoorTrajectory(const std::string& name, Rng& rng) {
     const SE3 moved(T.rotation(), T.translation() + d);
     return Rotate(moved, rot[0](t) * r_amp, rot[1](t) * r_amp, rot[2](t) * r_amp);
   };
-  if (name == "w_xyz") {  // translation along the axes, ~±0.4 m, little rotation
+  if (name == "w_xyz" || name == "unknown_mover") {  // along the axes, ~±0.4 m, little rotation
     return [=](double t) { return jitter(t, 0.4, 1.5 * kDeg, base); };
   }
   if (name == "w_static" || name == "s_static") {  // nearly still: mm and sub-degree jitter
@@ -196,6 +213,12 @@ const std::vector<PresetInfo>& Presets() {
        "a ring corridor of identical doors (14 x 7 m), walked once around and 5-14 m on (one "
        "true loop among aliases)",
        false, 1250, 30.0},
+      // Appended last: a preset's random stream is its index here, so the others stay as they were.
+      {"unknown_mover",
+       "the office without people; a large cart, labelled background (no network knows it), "
+       "pushed back and forth 1.3 m in front of the camera, stopping in view; camera as w_xyz "
+       "(moving/ holds its mask)",
+       false, 900, 30.0},
   };
   return kPresets;
 }
@@ -265,8 +288,9 @@ SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet
     return spec;
   }
   spec.camera = TumCamera(width > 0 ? width : 640, height > 0 ? height : 480);
-  const bool people = scene_name != "loop_room";
+  const bool people = scene_name != "loop_room" && scene_name != "unknown_mover";
   BuildOffice(b, people && scene_name != "s_static", people && scene_name == "s_static");
+  if (scene_name == "unknown_mover") AddPushedCart(b);
   spec.T_world_cam = IndoorTrajectory(scene_name, rng);
   if (static_scene) spec.world.actors.clear();
   return spec;

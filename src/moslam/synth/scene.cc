@@ -269,16 +269,73 @@ void Car::AppendBoxes(double t, uint16_t instance, std::vector<Box>* boxes) cons
   }
 }
 
+Eigen::Vector2d Cart::PositionAt(double t) const {
+  MOSLAM_CHECK(!stops.empty() && dwell_s.size() == stops.size() && max_speed > 0.0);
+  // One cycle: per stop, its dwell, then the leg to the next stop. A leg of length L with the
+  // speed profile v(u) = v_max sin(pi u / T) takes T = pi L / (2 v_max).
+  const size_t n = stops.size();
+  std::vector<double> leg_s(n);
+  double cycle = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    leg_s[i] = M_PI * (stops[(i + 1) % n] - stops[i]).norm() / (2.0 * max_speed);
+    cycle += dwell_s[i] + leg_s[i];
+  }
+  if (cycle <= 0.0) return stops.front();
+  double u = std::fmod(std::max(t, 0.0), cycle);
+  for (size_t i = 0; i < n; ++i) {
+    if (u < dwell_s[i]) return stops[i];
+    u -= dwell_s[i];
+    if (u < leg_s[i]) {
+      const double f = 0.5 * (1.0 - std::cos(M_PI * u / leg_s[i]));  // 0 -> 1, smooth ends
+      return stops[i] + f * (stops[(i + 1) % n] - stops[i]);
+    }
+    u -= leg_s[i];
+  }
+  return stops.front();
+}
+
+void Cart::AppendBoxes(double t, uint16_t instance, std::vector<Box>* boxes) const {
+  const Eigen::Vector2d xy = PositionAt(t);
+  const SE3 T = Translate(xy.x(), xy.y(), 0.0) * RotZ(heading);
+  const double l = size.x(), w = size.y(), h = size.z(), castor = 0.12;
+  auto add = [&](const SE3& pose, const Vector3d& half, int texture, double tile, float tint) {
+    Box b = MakeBox(pose, half, texture, tile, instance);
+    b.class_id = kBackground;  // unknown to every model card: that is the point of it
+    b.tint = tint;
+    boxes->push_back(b);
+  };
+  add(T * Translate(0, 0, castor + h / 2), Vector3d(l / 2, w / 2, h / 2), side, 0.0, 1.0f);
+  add(T * Translate(0, 0, castor + h + 0.01), Vector3d(l / 2 + 0.02, w / 2 + 0.02, 0.01), top, 0.6,
+      0.9f);
+  // Push handle at one end: two posts and a bar.
+  for (int s = -1; s <= 1; s += 2) {
+    add(T * Translate(-l / 2 - 0.03, s * (w / 2 - 0.05), castor + h + 0.12),
+        Vector3d(0.015, 0.015, 0.12), frame, 0.3, 0.5f);
+  }
+  add(T * Translate(-l / 2 - 0.03, 0, castor + h + 0.24), Vector3d(0.015, w / 2 - 0.03, 0.015),
+      frame, 0.3, 0.5f);
+  for (int i = 0; i < 4; ++i) {  // castors
+    const double x = (i < 2 ? 1 : -1) * (l / 2 - 0.08), y = (i % 2 ? 1 : -1) * (w / 2 - 0.08);
+    add(T * Translate(x, y, castor / 2), Vector3d(0.05, 0.03, castor / 2), frame, 0.3, 0.4f);
+  }
+}
+
 void Actor::AppendBoxes(double t, std::vector<Box>* boxes) const {
-  if (is_person) {
-    person.AppendBoxes(t, instance, boxes);
-  } else {
-    car.AppendBoxes(t, instance, boxes);
+  switch (kind) {
+    case ActorKind::kPerson:
+      person.AppendBoxes(t, instance, boxes);
+      break;
+    case ActorKind::kCar:
+      car.AppendBoxes(t, instance, boxes);
+      break;
+    case ActorKind::kCart:
+      cart.AppendBoxes(t, instance, boxes);
+      break;
   }
 }
 
 void Actor::AppendMeshes(double t, std::vector<Mesh>* meshes) const {
-  if (is_person) person.AppendMeshes(t, instance, meshes);
+  if (kind == ActorKind::kPerson) person.AppendMeshes(t, instance, meshes);
 }
 
 std::vector<Mesh> World::MeshesAt(double t) const {

@@ -108,11 +108,33 @@ struct Car {
   void AppendBoxes(double t, uint16_t instance, std::vector<Box>* boxes) const;
 };
 
+// A cart (issue 24's unknown mover): a large box on castors with a push handle, labelled
+// background, so no model card and no network calls it movable; only its motion and depth give
+// it away. It is pushed from stop to stop along a closed list of stops (world x, y), waiting
+// dwell_s at each, with a smooth start and stop (a half-cosine speed profile peaking at
+// max_speed): it stands still long enough to be mapped, then moves off, as a pushed cart does.
+// Its heading stays fixed (pushed sideways along a row, not steered).
+struct Cart {
+  std::vector<Eigen::Vector2d> stops;
+  std::vector<double> dwell_s;                            // seconds at each stop (one per stop)
+  double max_speed = 0.7;                                 // m/s at the middle of each leg
+  double heading = 0.0;                                   // radians from +x, fixed
+  int side = 0, top = 0, frame = 0;                       // textures: sides, top, frame/castors
+  Eigen::Vector3d size = Eigen::Vector3d(1.1, 0.7, 1.0);  // length, width, height of the box
+
+  // Ground position of the cart's centre at time t (seconds; cyclic over the stops).
+  Eigen::Vector2d PositionAt(double t) const;
+  void AppendBoxes(double t, uint16_t instance, std::vector<Box>* boxes) const;
+};
+
+enum class ActorKind { kPerson, kCar, kCart };
+
 struct Actor {
   uint16_t instance = 0;
-  bool is_person = true;
+  ActorKind kind = ActorKind::kPerson;
   Person person = Person::Seated({}, Eigen::Vector2d::Zero(), 0.0, 0.48, 0.0);
   Car car;
+  Cart cart;
   void AppendBoxes(double t, std::vector<Box>* boxes) const;
   void AppendMeshes(double t, std::vector<Mesh>* meshes) const;
 };

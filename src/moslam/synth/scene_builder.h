@@ -259,7 +259,7 @@ class Builder {
   void AddPerson(const Person& p) {
     Actor a;
     a.instance = NewInstance();
-    a.is_person = true;
+    a.kind = ActorKind::kPerson;
     a.person = p;
     world_.actors.push_back(a);
   }
@@ -267,8 +267,16 @@ class Builder {
   void AddCar(const Car& c) {
     Actor a;
     a.instance = NewInstance();
-    a.is_person = false;
+    a.kind = ActorKind::kCar;
     a.car = c;
+    world_.actors.push_back(a);
+  }
+
+  void AddCart(const Cart& c) {
+    Actor a;
+    a.instance = NewInstance();
+    a.kind = ActorKind::kCart;
+    a.cart = c;
     world_.actors.push_back(a);
   }
 

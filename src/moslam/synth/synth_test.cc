@@ -285,6 +285,47 @@ TEST(Synth, AliasingPresetsRevisitAPlaceOnlyOnTheRings) {
   }
 }
 
+// Issue 24's unknown mover: the cart stands still at its stops and moves between them (it is a
+// moving instance only then), it is labelled background (no card knows it), and it fills a good
+// part of the view when it passes in front of the camera.
+TEST(Synth, UnknownMoverCartStopsMovesAndIsBackground) {
+  const TextureSet textures = TextureSet::Procedural(1, 4, 64);
+  const SequenceSpec spec = MakePreset("unknown_mover", 5, textures);
+  ASSERT_EQ(spec.world.actors.size(), 1u);
+  const Actor& actor = spec.world.actors.front();
+  ASSERT_EQ(actor.kind, ActorKind::kCart);
+  const Cart& cart = actor.cart;
+  // At the first stop for its whole dwell, then on the way: exactly where a leg starts.
+  EXPECT_EQ(cart.PositionAt(0.0), cart.stops[0]);
+  EXPECT_EQ(cart.PositionAt(0.99 * cart.dwell_s[0]), cart.stops[0]);
+  EXPECT_GT((cart.PositionAt(cart.dwell_s[0] + 0.5) - cart.stops[0]).norm(), 0.01);
+  double fastest = 0.0;
+  bool stood_still = false, moved = false;
+  for (double t = 0.0; t < 30.0; t += 1.0 / 30) {
+    const double speed = (cart.PositionAt(t + 1.0 / 30) - cart.PositionAt(t)).norm() * 30;
+    fastest = std::max(fastest, speed);
+    const std::vector<uint16_t> moving = spec.world.MovingInstances(t, 1.0 / 30);
+    stood_still = stood_still || moving.empty();
+    moved = moved || (moving.size() == 1 && moving[0] == actor.instance);
+  }
+  EXPECT_LE(fastest, cart.max_speed * 1.01);  // the half-cosine profile peaks at max_speed
+  EXPECT_TRUE(stood_still);
+  EXPECT_TRUE(moved);
+  std::vector<Box> boxes;
+  actor.AppendBoxes(0.0, &boxes);
+  for (const Box& b : boxes) EXPECT_EQ(b.class_id, kBackground);
+  // Rendered at the middle stop (in front of the camera): a large share of the image, not moving.
+  const SequenceSpec small = MakePreset("unknown_mover", 5, textures, 160, 120);
+  Renderer renderer(160, 120, textures);
+  const double at_middle =
+      cart.dwell_s[0] + M_PI * (cart.stops[1] - cart.stops[0]).norm() / (2 * cart.max_speed) + 0.5;
+  const FrameData f = RenderFrame(small, renderer, static_cast<int>(at_middle * 30),
+                                  Small("unknown_mover", "unused", 1));
+  EXPECT_GT(cv::countNonZero(f.instance == actor.instance), 0.15 * f.instance.total());
+  EXPECT_EQ(cv::countNonZero(f.moving), 0);
+  EXPECT_EQ(cv::countNonZero((f.class_id != kBackground) & (f.instance == actor.instance)), 0);
+}
+
 TEST(Synth, SeatedPresetPeopleMoveALittle) {
   testing::TempDir dir;
   GeneratorOptions o = Small("s_static", dir.path(), 3);
