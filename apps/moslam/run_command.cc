@@ -70,6 +70,9 @@ constexpr const char* kShippedVocabulary = "data/vocab/moslam_orb.mvoc";
 std::string ResolveVocabulary(const std::string& arg) {
   if (arg == "none") return "";
   if (arg != "default") {
+    if (std::filesystem::is_directory(arg)) {
+      ThrowInput("--vocabulary: {} is a directory, not a vocabulary file", arg);
+    }
     if (!std::filesystem::is_regular_file(arg)) ThrowInput("--vocabulary: no file '{}'", arg);
     return arg;
   }
@@ -195,6 +198,10 @@ void Run(const RunArgs& args) {
   options.colour =
       sequence.sensor == io::SensorType::kRgbD ? io::ColourMode::kColour : io::ColourMode::kGrey;
   options.depth_factor = settings.depth_map_factor;
+  if (settings.camera.HasSize()) {
+    options.image_size = cv::Size(settings.camera.width, settings.camera.height);
+    options.image_size_source = args.settings;
+  }
 
   runner::RunDescription description;
   description.dataset_path = sequence.root;
@@ -209,6 +216,7 @@ void Run(const RunArgs& args) {
                sequence.size(), io::ToString(sequence.sensor), description.mask_source,
                net::DescribeOpenBlasCore());
 
+  runner::CheckGroundTruth(sequence);
   const std::unique_ptr<runner::Tracker> tracker = MakeTracker(settings, sequence.sensor, args);
   const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
