@@ -240,7 +240,7 @@ void AddRunCommand(CLI::App& app) {
       ->required();
   command->add_option("--settings", args->settings, "ORB-SLAM2 settings YAML (configs/*.yaml)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(ExistingFileOf("settings file"));
   command
       ->add_option("--mask-source", args->mask_source,
                    "Movable-object masks: none, files DIR (DIR/<image stem>.png), synth-gt (the "

@@ -92,8 +92,8 @@ LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options) {
   if (!options.image_size.empty() && images.left.size() != options.image_size) {
     ThrowInFile(
         frame.image_left,
-        fmt::format("frame {}: the image is {}x{}, but {} give Camera.width x "
-                    "Camera.height = {}x{}, the size their intrinsics are for",
+        fmt::format("frame {}: the image is {}x{}, but Camera.width x Camera.height in {} are "
+                    "{}x{}, the size its intrinsics are for",
                     frame.index, images.left.cols, images.left.rows, options.image_size_source,
                     options.image_size.width, options.image_size.height));
   }
