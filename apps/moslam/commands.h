@@ -2,9 +2,28 @@
 // subcommands) on the app; the callback runs the work and throws InputError on bad input.
 #pragma once
 
+#include <filesystem>
+#include <string>
+
 #include <CLI/CLI.hpp>
 
 namespace moslam::app {
+
+// CLI::ExistingFile with a message that says what the file should have been: "X is a directory,
+// not a settings file" rather than CLI11's "File is actually a directory", which the log showed
+// as a bare "Run with --help".
+inline CLI::Validator ExistingFileOf(const std::string& what) {
+  return CLI::Validator(
+      [what](std::string& path) -> std::string {
+        std::error_code error;
+        if (std::filesystem::is_directory(path, error)) {
+          return path + " is a directory, not a " + what;
+        }
+        if (!std::filesystem::is_regular_file(path, error)) return "no " + what + " " + path;
+        return std::string();
+      },
+      "FILE");
+}
 
 void AddEvalCommand(CLI::App& app);
 void AddDatasetCommand(CLI::App& app);

@@ -166,7 +166,7 @@ void AddFeaturesCommand(CLI::App& app) {
   command
       ->add_option("--settings", args->settings,
                    "ORB-SLAM2 settings YAML; its ORBextractor.* keys are used (default: none)")
-      ->check(CLI::ExistingFile);
+      ->check(ExistingFileOf("settings file"));
   command->add_option("--out", args->out, "Overlay image to write (PNG, JPEG, ...)")->required();
   command->add_option("--keypoints", args->keypoints,
                       "CSV file to write: x,y,octave,angle,response per keypoint, level-0 pixels "

@@ -73,6 +73,9 @@ constexpr const char* kShippedVocabulary = "data/vocab/moslam_orb.mvoc";
 std::string ResolveVocabulary(const std::string& arg) {
   if (arg == "none") return "";
   if (arg != "default") {
+    if (std::filesystem::is_directory(arg)) {
+      ThrowInput("--vocabulary: {} is a directory, not a vocabulary file", arg);
+    }
     if (!std::filesystem::is_regular_file(arg)) ThrowInput("--vocabulary: no file '{}'", arg);
     return arg;
   }
@@ -201,6 +204,10 @@ void Run(const RunArgs& args) {
   options.colour =
       sequence.sensor == io::SensorType::kRgbD ? io::ColourMode::kColour : io::ColourMode::kGrey;
   options.depth_factor = settings.depth_map_factor;
+  if (settings.camera.HasSize()) {
+    options.image_size = cv::Size(settings.camera.width, settings.camera.height);
+    options.image_size_source = args.settings;
+  }
 
   runner::RunDescription description;
   description.dataset_path = sequence.root;
@@ -215,6 +222,7 @@ void Run(const RunArgs& args) {
                sequence.size(), io::ToString(sequence.sensor), description.mask_source,
                net::DescribeOpenBlasCore());
 
+  runner::CheckGroundTruth(sequence);
   const std::unique_ptr<runner::Tracker> tracker = MakeTracker(settings, sequence.sensor, args);
   const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
@@ -238,7 +246,7 @@ void AddRunCommand(CLI::App& app) {
       ->required();
   command->add_option("--settings", args->settings, "ORB-SLAM2 settings YAML (configs/*.yaml)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(ExistingFileOf("settings file"));
   command
       ->add_option("--mask-source", args->mask_source,
                    "Movable-object masks: none, files DIR (DIR/<image stem>.png), synth-gt (the "

@@ -135,7 +135,9 @@ void AddVocabCommand(CLI::App& app) {
   auto info_path = std::make_shared<std::string>();
   CLI::App* info_cmd = command->add_subcommand(
       "info", "Load a vocabulary (binary or DBoW2 text) and print its shape and load time");
-  info_cmd->add_option("file", *info_path, "Vocabulary file")->required()->check(CLI::ExistingFile);
+  info_cmd->add_option("file", *info_path, "Vocabulary file")
+      ->required()
+      ->check(ExistingFileOf("vocabulary file"));
   info_cmd->callback([info_path] { RunInfo(*info_path); });
 
   auto convert_paths = std::make_shared<std::pair<std::string, std::string>>();
@@ -144,7 +146,7 @@ void AddVocabCommand(CLI::App& app) {
       "Convert a vocabulary (e.g. ORB-SLAM2's DBoW2 text ORBvoc.txt) to the binary format");
   convert_cmd->add_option("in", convert_paths->first, "Vocabulary file (binary or DBoW2 text)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(ExistingFileOf("vocabulary file"));
   convert_cmd->add_option("out", convert_paths->second, "Binary vocabulary to write")->required();
   convert_cmd->callback(
       [convert_paths] { RunConvert(convert_paths->first, convert_paths->second); });

@@ -4,44 +4,13 @@
 
 #include <Eigen/Geometry>
 
+#include "moslam/camera/camera_check.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
 
 namespace moslam::camera {
-namespace {
 
-void RequireFinite(const char* name, double value) {
-  if (!std::isfinite(value)) ThrowInput("camera {} must be a finite number, got {}", name, value);
-}
-
-}  // namespace
-
-void PinholeOptions::Check() const {
-  RequireFinite("fx", fx);
-  RequireFinite("fy", fy);
-  RequireFinite("cx", cx);
-  RequireFinite("cy", cy);
-  if (!(fx > 0.0)) ThrowInput("camera fx must be a positive focal length in pixels, got {}", fx);
-  if (!(fy > 0.0)) ThrowInput("camera fy must be a positive focal length in pixels, got {}", fy);
-  if (width < 0 || height < 0) {
-    ThrowInput("camera width and height must not be negative, got {}x{}", width, height);
-  }
-  if ((width == 0) != (height == 0)) {
-    ThrowInput("camera width and height must both be given (or both be 0: unknown), got {}x{}",
-               width, height);
-  }
-  if (HasSize()) {
-    // The principal point of a real camera is near the image centre; outside the image it is a
-    // sign of swapped or mistyped values (e.g. cx and cy exchanged for a portrait image).
-    if (cx < 0.0 || cx >= width) {
-      ThrowInput("camera cx = {} lies outside the image (width {})", cx, width);
-    }
-    if (cy < 0.0 || cy >= height) {
-      ThrowInput("camera cy = {} lies outside the image (height {})", cy, height);
-    }
-  }
-  distortion.Check();
-}
+void PinholeOptions::Check() const { CheckPinholeOptions(*this, "camera "); }
 
 PinholeCamera::PinholeCamera(const PinholeOptions& options) : options_(options) {
   options_.Check();

@@ -9,11 +9,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "moslam/camera/camera_check.h"
 #include "moslam/util/error.h"
 
 namespace moslam::camera {
 namespace {
 
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 PinholeOptions EurocCam0() {
@@ -68,6 +70,65 @@ TEST(PinholeOptions, InvalidValuesNameTheField) {
     EXPECT_THAT(ErrorOf([&] { o.Check(); }), HasSubstr(field));
     EXPECT_THROW(PinholeCamera{o}, InputError) << field;
   }
+}
+
+// Issue 31: focal lengths far outside what a lens of this image size can have overflowed poses
+// further on; they are refused with the field named.
+TEST(PinholeOptions, FocalLengthsOutsideTheSaneRangeNameTheField) {
+  for (const double f : {1e-300, 0.5, 1e300, 1e7}) {
+    PinholeOptions o = Ideal();
+    o.fx = f;
+    EXPECT_THAT(ErrorOf([&] { o.Check(); }), AllOf(HasSubstr("camera fx"), HasSubstr("focal")))
+        << f;
+    o = Ideal();
+    o.fy = f;
+    EXPECT_THAT(ErrorOf([&] { CheckPinholeOptions(o, "Camera."); }), HasSubstr("Camera.fy")) << f;
+  }
+  // The range's ends for a 640x480 image: 6.4 and 640000 px.
+  PinholeOptions o = Ideal();
+  o.fx = 6.4;
+  EXPECT_NO_THROW(o.Check());
+  o.fx = 640000.0;
+  EXPECT_NO_THROW(o.Check());
+  // Without an image size, the absolute range.
+  o.width = o.height = 0;
+  o.fx = 1e300;
+  EXPECT_THAT(ErrorOf([&] { o.Check(); }), HasSubstr("fx"));
+}
+
+TEST(PinholeOptions, DistortionMustBeInvertibleOverTheImage) {
+  struct Case {
+    const char* name;
+    Distortion d;
+  };
+  const std::vector<Case> cases = {
+      {"k1 = -1e6", {-1e6, 0, 0, 0, 0}},
+      {"k3 = 1e300", {0, 0, 0, 0, 1e300}},
+      {"p1 = 0.9", {0, 0, 0.9, 0, 0}},
+      {"k1 = -1 (folds inside the image)", {-1.0, 0, 0, 0, 0}},
+  };
+  for (const Case& c : cases) {
+    PinholeOptions o = EurocCam0();
+    o.distortion = c.d;
+    EXPECT_THAT(ErrorOf([&] { CheckPinholeOptions(o, "Camera."); }),
+                AllOf(HasSubstr("Camera.k1"), HasSubstr("Camera.p1"), HasSubstr("752x480")))
+        << c.name;
+    EXPECT_THROW(PinholeCamera{o}, InputError) << c.name;
+  }
+  // Real calibrations pass: EuRoC's cam0 and ORB-SLAM2's TUM1 (freiburg1) coefficients.
+  EXPECT_NO_THROW(EurocCam0().Check());
+  PinholeOptions tum1 = Ideal();
+  tum1.fx = 517.306408;
+  tum1.fy = 516.469215;
+  tum1.cx = 318.643040;
+  tum1.cy = 255.313989;
+  tum1.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
+  EXPECT_NO_THROW(tum1.Check());
+  // Without an image size there is nothing to check the distortion over.
+  PinholeOptions unknown = EurocCam0();
+  unknown.width = unknown.height = 0;
+  unknown.distortion.k1 = -1e6;
+  EXPECT_NO_THROW(unknown.Check());
 }
 
 TEST(PinholeCamera, CalibrationMatrix) {

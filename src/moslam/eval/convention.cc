@@ -34,7 +34,16 @@ void RequireComparableStamps(const Trajectory& gt, const Trajectory& est) {
 Association AssociatePoses(const Trajectory& gt, const Trajectory& est, Convention convention,
                            double max_dt, double offset) {
   RequireComparableStamps(gt, est);
-  if (!gt.has_timestamps()) return AssociateByIndex(gt.size(), est.size());
+  if (!gt.has_timestamps()) {
+    if (gt.size() != est.size()) {
+      ThrowInput(
+          "trajectories without timestamps are matched by index and need equal lengths, but the "
+          "ground truth '{}' has {} poses and the estimate '{}' {} (give the ground truth "
+          "timestamps with --gt-times to match by time)",
+          gt.name, gt.size(), est.name, est.size());
+    }
+    return AssociateByIndex(gt.size(), est.size());
+  }
   if (convention == Convention::kTum) {
     return AssociateGreedy(gt.timestamps, est.timestamps, offset, max_dt);
   }

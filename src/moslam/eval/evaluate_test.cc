@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "moslam/eval/test_trajectories.h"
+#include "moslam/testing/error_of.h"
 #include "moslam/testing/shared_data.h"
 #include "moslam/util/error.h"
 
@@ -98,6 +99,29 @@ TEST_F(Evaluate, PlotOfFilesWithoutTimestampsIsOverFrames) {
   const EvalOutput rpe = RunEvaluation(request_);
   ASSERT_TRUE(rpe.plot.has_value());
   EXPECT_EQ(rpe.plot->time_label, "frame");
+}
+
+// Issue 31: files matched by index with different lengths said so without naming either file.
+TEST_F(Evaluate, IndexMatchedFilesOfDifferentLengthsAreNamed) {
+  const Trajectory gt = testing::MakeCurve(300);
+  request_.inputs.gt_path = dir_.path() + "/gt_kitti.txt";
+  request_.inputs.est_path = dir_.path() + "/est_kitti.txt";
+  WriteKitti(gt, request_.inputs.gt_path);
+  for (const Metric metric : {Metric::kAte, Metric::kRpe}) {
+    for (const int rows : {1, 2, 150}) {
+      Trajectory est = gt;
+      est.poses.resize(rows);
+      est.raw_rotations.clear();
+      if (!est.timestamps.empty()) est.timestamps.resize(rows);
+      WriteKitti(est, request_.inputs.est_path);
+      request_.metric = metric;
+      EXPECT_THAT(
+          moslam::testing::ErrorOf([&] { RunEvaluation(request_); }),
+          ::testing::AllOf(HasSubstr(request_.inputs.gt_path), HasSubstr(request_.inputs.est_path),
+                           HasSubstr("300"), HasSubstr(std::to_string(rows))))
+          << rows << " rows";
+    }
+  }
 }
 
 TEST_F(Evaluate, BadSettingsAreInputErrors) {

@@ -264,7 +264,8 @@ ResultTable EvaluateRuns(const std::vector<TableRun>& runs, const std::string& b
     const size_t s = IndexOf(&table.sequences, run.sequence);
     const size_t m = IndexOf(&table.methods, run.method);
     if (table.cells[0][s][m]) {
-      ThrowInput("two runs of method '{}' on sequence '{}'", run.method, run.sequence);
+      ThrowInput("two runs of method '{}' on sequence '{}'", Excerpt(run.method),
+                 Excerpt(run.sequence));
     }
     EvalRequest request = settings;
     request.inputs.gt_path = run.gt_path;
@@ -281,8 +282,8 @@ ResultTable EvaluateRuns(const std::vector<TableRun>& runs, const std::string& b
   }
   for (size_t s = 0; s < table.sequences.size(); ++s) {
     if (!table.cells[0][s][0]) {
-      ThrowInput("sequence '{}' has no run of the baseline '{}'", table.sequences[s],
-                 table.methods[0]);
+      ThrowInput("sequence '{}' has no run of the baseline '{}'", Excerpt(table.sequences[s]),
+                 Excerpt(table.methods[0]));
     }
   }
   return table;

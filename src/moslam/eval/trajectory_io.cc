@@ -24,7 +24,7 @@ std::vector<double> ParseNumbers(const std::string& path, const TextLine& line, 
     const std::optional<double> v = ParseDouble(fields[k]);
     if (!v) {
       ThrowAtLine(path, line.number,
-                  fmt::format("field {} ('{}') is not a number", k + 1, std::string(fields[k])));
+                  fmt::format("field {} ('{}') is not a number", k + 1, Excerpt(fields[k])));
     }
     values.push_back(*v);
   }

@@ -21,7 +21,7 @@ std::vector<ClassInfo> ReadClassList(const std::string& path) {
     const auto movable = fields.size() == 3 ? ParseInt(fields[2]) : std::nullopt;
     if (!id || !movable || (*movable != 0 && *movable != 1)) {
       ThrowAtLine(path, line.number,
-                  "expected `<id> <name> <movable 0|1>`, got '" + line.text + "'");
+                  "expected `<id> <name> <movable 0|1>`, got '" + Excerpt(line.text) + "'");
     }
     if (*id < 0 || *id > 255) ThrowAtLine(path, line.number, "class id must be in 0..255");
     ClassInfo info{static_cast<int>(*id), std::string(fields[1]), *movable == 1, line.number};
@@ -29,7 +29,7 @@ std::vector<ClassInfo> ReadClassList(const std::string& path) {
       ThrowAtLine(path, line.number, fmt::format("class id {} repeated", info.id));
     }
     if (!names.insert(info.name).second) {
-      ThrowAtLine(path, line.number, "class name '" + info.name + "' repeated");
+      ThrowAtLine(path, line.number, "class name '" + Excerpt(info.name) + "' repeated");
     }
     classes.push_back(std::move(info));
   }

@@ -36,9 +36,9 @@ std::vector<CameraEntry> ReadCameraCsv(const std::string& camera_folder) {
     const auto fields = internal::SplitExactly(csv, line, 2, true, "'timestamp [ns],filename'");
     const std::optional<long long> stamp = ParseInt(fields[0]);
     if (!stamp || *stamp < 0) {
-      ThrowAtLine(
-          csv, line.number,
-          fmt::format("timestamp '{}' is not a non-negative integer of nanoseconds", fields[0]));
+      ThrowAtLine(csv, line.number,
+                  fmt::format("timestamp '{}' is not a non-negative integer of nanoseconds",
+                              Excerpt(fields[0])));
     }
     if (previous && *stamp <= *previous) {
       ThrowAtLine(csv, line.number,

@@ -18,16 +18,18 @@ std::vector<std::string_view> SplitExactly(const std::string& path, const TextLi
   if (fields.size() != count) {
     ThrowAtLine(path, line.number,
                 fmt::format("expected {} fields ({}), got {}: '{}'", count, format, fields.size(),
-                            line.text));
+                            Excerpt(line.text)));
   }
   return fields;
 }
 
 double ParseSeconds(const std::string& path, const TextLine& line, std::string_view field) {
   const std::optional<double> value = ParseDouble(field);
-  if (!value) ThrowAtLine(path, line.number, fmt::format("timestamp '{}' is not a number", field));
+  if (!value)
+    ThrowAtLine(path, line.number, fmt::format("timestamp '{}' is not a number", Excerpt(field)));
   if (!std::isfinite(*value)) {
-    ThrowAtLine(path, line.number, fmt::format("timestamp '{}' is not a finite number", field));
+    ThrowAtLine(path, line.number,
+                fmt::format("timestamp '{}' is not a finite number", Excerpt(field)));
   }
   return *value;
 }
@@ -51,7 +53,7 @@ std::string ResolvePath(const std::string& root, std::string_view relative) {
 void RequireListedFile(const std::string& index_path, int line, const std::string& image) {
   std::error_code ec;
   if (!fs::is_regular_file(image, ec)) {
-    ThrowAtLine(index_path, line, fmt::format("listed file '{}' not found", image));
+    ThrowAtLine(index_path, line, fmt::format("listed file '{}' not found", Excerpt(image, 400)));
   }
 }
 

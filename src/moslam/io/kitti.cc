@@ -28,7 +28,7 @@ geometry::Matrix3x4d ParseProjection(const std::string& path, const TextLine& li
     const std::optional<double> v = ParseDouble(values[k]);
     if (!v || !std::isfinite(*v)) {
       ThrowAtLine(path, line.number,
-                  fmt::format("value {} '{}' is not a finite number", k + 1, values[k]));
+                  fmt::format("value {} '{}' is not a finite number", k + 1, Excerpt(values[k])));
     }
     P(k / 4, k % 4) = *v;  // row-major
   }
@@ -77,7 +77,7 @@ KittiCalibration ReadKittiCalibration(const std::string& path) {
         ThrowAtLine(path, line.number, "labelled line after unlabelled lines: cannot tell cameras");
       }
       if (label.size() != 2 || label[0] != 'P' || label[1] < '0' || label[1] > '3') {
-        ThrowAtLine(path, line.number, fmt::format("unknown label '{}:'", label));
+        ThrowAtLine(path, line.number, fmt::format("unknown label '{}:'", Excerpt(label)));
       }
       camera = label[1] - '0';
       if (calibration.P[camera]) {

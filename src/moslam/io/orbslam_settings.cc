@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "moslam/camera/camera_check.h"
 #include "moslam/util/error.h"
 #include "moslam/util/strings.h"
 #include "moslam/util/yaml.h"
@@ -104,11 +105,7 @@ void OrbExtractorOptions::Check() const {
 double OrbSlamSettings::Baseline() const { return camera.fx > 0.0 ? bf / camera.fx : 0.0; }
 
 void OrbSlamSettings::Check(SensorType sensor) const {
-  try {
-    camera.Check();
-  } catch (const InputError& e) {
-    ThrowInput("invalid Camera.* value: {}", e.what());
-  }
+  camera::CheckPinholeOptions(camera, "Camera.");
   if (!std::isfinite(fps) || !(fps > 0.0)) {
     ThrowInput("Camera.fps must be a positive number of frames per second, got {}", fps);
   }

@@ -214,6 +214,54 @@ TEST(LoadOrbSlamSettings, InvalidValuesNameTheKeyAndFile) {
               AllOf(HasSubstr(half), HasSubstr("height")));
 }
 
+// Issue 31: values that passed the old checks and then aborted deep inside the system (an SE(3)
+// check on inf/NaN poses, an empty keypoint grid) are refused here, naming the key and file.
+TEST(LoadOrbSlamSettings, AbsurdCameraValuesNameTheKeyAndFile) {
+  testing::TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"Camera.fx", "1e-300"}, {"Camera.fx", "1e300"}, {"Camera.fy", "1e300"}, {"Camera.fy", "0.5"},
+      {"Camera.k1", "-1e6"},   {"Camera.k3", "1e300"}, {"Camera.p1", "0.9"},
+  };
+  for (const auto& [key, value] : cases) {
+    const std::string path = dir.Write("s.yaml", SettingsText(With(RgbdKeys(), key, value)));
+    EXPECT_THAT(ErrorOf([&] { LoadOrbSlamSettings(path, SensorType::kRgbD); }),
+                AllOf(HasSubstr(path), HasSubstr(key)))
+        << key << ": " << value;
+  }
+  // The file without the distortion passes: the refusals above are the values, not the file.
+  Keys ideal = RgbdKeys();
+  for (const char* k : {"Camera.k1", "Camera.k2", "Camera.p1", "Camera.p2", "Camera.k3"}) {
+    ideal = With(ideal, k, "0.0");
+  }
+  EXPECT_NO_THROW(LoadOrbSlamSettings(dir.Write("s.yaml", SettingsText(ideal)), SensorType::kRgbD));
+}
+
+TEST(LoadOrbSlamSettings, NumbersMustBeDecimal) {
+  // OpenCV reads 0x217 as 535 and 030 as 24 (strtol with base 0); a settings file means neither.
+  testing::TempDir dir;
+  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+           {"Camera.fx", "0x217"}, {"Camera.fps", "030"}, {"ORBextractor.nLevels", "-010"}}) {
+    const std::string path = dir.Write("s.yaml", SettingsText(With(RgbdKeys(), key, value)));
+    EXPECT_THAT(ErrorOf([&] { LoadOrbSlamSettings(path, SensorType::kRgbD); }),
+                AllOf(HasSubstr(path + ":"), HasSubstr(key), HasSubstr("decimal")))
+        << key << ": " << value;
+  }
+  // Decimal numbers with a leading zero before the point, and exponents, stay numbers.
+  const std::string fine = dir.Write(
+      "s.yaml", SettingsText(With(With(RgbdKeys(), "Camera.p1", "0.0"), "Camera.fps", "3e1")));
+  EXPECT_NO_THROW(LoadOrbSlamSettings(fine, SensorType::kRgbD));
+}
+
+TEST(LoadOrbSlamSettings, ADirectoryOrAListIsNotASettingsFile) {
+  testing::TempDir dir;
+  dir.Write("folder/x", "");  // creates the folder
+  EXPECT_THAT(ErrorOf([&] { LoadOrbSlamSettings(dir.path() + "/folder", SensorType::kRgbD); }),
+              AllOf(HasSubstr(dir.path() + "/folder"), HasSubstr("is a directory")));
+  const std::string list = dir.Write("list.yaml", "%YAML:1.0\n- Camera.fx: 500\n- 2\n");
+  EXPECT_THAT(ErrorOf([&] { LoadOrbSlamSettings(list, SensorType::kRgbD); }),
+              AllOf(HasSubstr(list), HasSubstr("top level")));
+}
+
 TEST(LoadOrbSlamSettings, MissingOrBrokenFile) {
   testing::TempDir dir;
   EXPECT_THAT(ErrorOf([&] { LoadOrbSlamSettings(dir.path() + "/none.yaml", SensorType::kRgbD); }),

@@ -195,6 +195,21 @@ TEST(ReadTumRgbd, BadAssociationsFilesNameFileAndLine) {
               AllOf(HasSubstr("missing.txt"), HasSubstr("not found")));
 }
 
+// Issue 31: a message quoted the whole offending line, megabytes for a file without newlines.
+TEST(ReadTumRgbd, HugeBadLinesAreQuotedAsExcerpts) {
+  testing::TempDir dir;
+  MakeTumFolder(dir, 3);
+  TumRgbdOptions options;
+  const std::string huge(8'000'000, '7');
+  for (const std::string& line : {"1.0 " + huge + " 2.0\n", huge + "x rgb/a.png 1.0 depth/b.png\n",
+                                  "1.0 rgb/" + huge + ".png 1.005 depth/1.005000.png\n"}) {
+    options.associations_path = dir.Write("assoc.txt", line);
+    const std::string message = ErrorOf([&] { ReadTumRgbd(dir.path(), options); });
+    EXPECT_THAT(message, AllOf(HasSubstr(options.associations_path + ":1:"), HasSubstr("...")));
+    EXPECT_LT(message.size(), 1000u) << message.substr(0, 200);
+  }
+}
+
 TEST(ReadTumFileList, ReadsStampsAndResolvesPaths) {
   testing::TempDir dir;
   MakeTumFolder(dir, 3);

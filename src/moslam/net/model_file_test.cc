@@ -1,6 +1,11 @@
 #include "moslam/net/model_file.h"
 
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -119,6 +124,92 @@ TEST(ModelFile, WrongKindMissingFileAndGarbageAreInputErrors) {
     ++files;
   }
   EXPECT_EQ(files, 2);
+}
+
+std::string ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+uint32_t Le32(const std::string& b, size_t at) {
+  uint32_t v = 0;
+  for (int i = 3; i >= 0; --i) v = v << 8 | static_cast<unsigned char>(b[at + i]);
+  return v;
+}
+
+// The offset and size of the largest tensor record of a model file: a zip archive whose tensors
+// are stored uncompressed, one record "<archive>/data/<n>" each, sizes in the central directory
+// (the local headers defer them to data descriptors).
+std::pair<size_t, size_t> LargestTensorRecord(const std::string& bytes) {
+  std::pair<size_t, size_t> best{0, 0};
+  for (size_t at = bytes.find("PK\x01\x02"); at != std::string::npos && at + 46 <= bytes.size();
+       at = bytes.find("PK\x01\x02", at + 4)) {
+    const size_t size = Le32(bytes, at + 20);
+    const size_t name_length = Le32(bytes, at + 28) & 0xffffu;
+    const std::string name = bytes.substr(at + 46, name_length);
+    if (name.find("/data/") == std::string::npos || size <= best.second) continue;
+    const size_t local = Le32(bytes, at + 42);
+    const size_t data =
+        local + 30 + (Le32(bytes, local + 26) & 0xffffu) + (Le32(bytes, local + 28) & 0xffffu);
+    best = {data, size};
+  }
+  return best;
+}
+
+// Issue 31: libtorch does not check the zip records' CRCs, so a model file with flipped bytes in
+// its weights loaded and ran; the format's checksum (version 2) refuses it.
+TEST(ModelFile, FlippedBytesInTheWeightsAreRefused) {
+  testing::TempDir dir;
+  SegmenterNet net(SmallConfig(NetKind::kSegmenter));
+  for (const bool half : {false, true}) {
+    const std::string path = dir.path() + "/s.mnet";
+    SaveSegmenter(path, net, half);
+    EXPECT_NO_THROW(LoadSegmenter(path));
+    std::string bytes = ReadBytes(path);
+    const auto [offset, size] = LargestTensorRecord(bytes);
+    ASSERT_GT(size, 64u) << "no tensor record found";
+    for (size_t i = 0; i < 16; ++i) bytes[offset + size / 2 + 3 * i] ^= 0x5a;
+    const std::string damaged = dir.Write("damaged.mnet", bytes);
+    EXPECT_THAT(ErrorOf([&] { LoadSegmenter(damaged); }),
+                ::testing::AllOf(HasSubstr(damaged), HasSubstr("damaged"), HasSubstr("CRC-32")))
+        << (half ? "float16" : "float32");
+  }
+}
+
+// A model file as format version `version` lays it out without a checksum (version 1 wrote
+// exactly this).
+void SaveWithoutChecksum(const std::string& path, SegmenterNet& net, int64_t version) {
+  c10::Dict<std::string, at::Tensor> weights;
+  for (const auto& p : net->named_parameters()) weights.insert(p.key(), p.value().detach().clone());
+  for (const auto& b : net->named_buffers()) weights.insert(b.key(), b.value().detach().clone());
+  torch::serialize::OutputArchive archive;
+  archive.write("format", c10::IValue(std::string("moslam-net")));
+  archive.write("version", c10::IValue(version));
+  archive.write("kind", c10::IValue(std::string("segmenter")));
+  archive.write("config", c10::IValue(ToJson(net->config()).dump()));
+  archive.write("weights", c10::IValue(weights));
+  archive.save_to(path);
+}
+
+TEST(ModelFile, VersionOneFilesWithoutChecksumStillLoad) {
+  testing::TempDir dir;
+  SegmenterNet net(SmallConfig(NetKind::kSegmenter));
+  net->eval();
+  const std::string v1 = dir.path() + "/v1.mnet";
+  SaveWithoutChecksum(v1, net, 1);
+  SegmenterNet loaded = LoadSegmenter(v1);
+  loaded->eval();
+  torch::NoGradGuard no_grad;
+  EXPECT_TRUE(torch::equal(loaded->forward(Input()).logits, net->forward(Input()).logits));
+  // A version 2 file must carry its checksum; a later version is not read at all.
+  const std::string v2 = dir.path() + "/v2.mnet";
+  SaveWithoutChecksum(v2, net, 2);
+  EXPECT_THAT(ErrorOf([&] { LoadSegmenter(v2); }),
+              ::testing::AllOf(HasSubstr(v2), HasSubstr("checksum")));
+  const std::string v9 = dir.path() + "/v9.mnet";
+  SaveWithoutChecksum(v9, net, 9);
+  EXPECT_THAT(ErrorOf([&] { LoadSegmenter(v9); }),
+              ::testing::AllOf(HasSubstr(v9), HasSubstr("version 9")));
 }
 
 // A few Adam steps on a fixed regression target.

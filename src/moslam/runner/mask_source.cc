@@ -12,6 +12,7 @@
 
 #include "moslam/io/class_list.h"
 #include "moslam/runner/model_mask_source.h"
+#include "moslam/semantic/input_limits.h"
 #include "moslam/util/error.h"
 #include "moslam/util/strings.h"
 #include "moslam/util/text_file.h"
@@ -71,7 +72,10 @@ void MaskOptions::Check() const {
   if (!model && crf && *crf != semantic::CrfMode::kNone) {
     ThrowInput("--crf: applies to --mask-source onnx, detector and model only");
   }
-  if (dilate_px < 0) ThrowInput("--mask-dilate: must be >= 0 pixels, got {}", dilate_px);
+  if (dilate_px < 0 || dilate_px > semantic::kMaxDilatePx) {
+    ThrowInput("--mask-dilate: must be in [0, {}] pixels, got {}", semantic::kMaxDilatePx,
+               dilate_px);
+  }
 }
 
 std::string MaskPathFor(const std::string& folder, const io::FrameEntry& frame) {

@@ -62,7 +62,7 @@ struct MaskOptions {
   // onnx, detector, model: CRF kernels; nullopt = the card's refine settings (no CRF unless set
   // there).
   std::optional<semantic::CrfMode> crf;
-  int dilate_px = 0;  // grow every mask by this many pixels (elliptic element), >= 0
+  int dilate_px = 0;  // grow every mask by this many pixels (elliptic), 0..semantic::kMaxDilatePx
   // InputError naming the command-line option of the first bad value.
   void Check() const;
 };

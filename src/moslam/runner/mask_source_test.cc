@@ -11,6 +11,7 @@
 #include "moslam/io/dataset.h"
 #include "moslam/runner/run_loop.h"
 #include "moslam/runner/test_sequences.h"
+#include "moslam/semantic/input_limits.h"
 #include "moslam/testing/error_of.h"
 
 namespace moslam::runner {
@@ -177,6 +178,13 @@ TEST(MaskSourceTest, OptionsAreChecked) {
   MaskOptions options;
   options.dilate_px = -1;
   EXPECT_THAT(ErrorOf([&] { options.Check(); }), HasSubstr("--mask-dilate"));
+  // Issue 31: --mask-dilate 5000 ran for minutes a frame; the bound is refused up front.
+  options.dilate_px = 5000;
+  EXPECT_THAT(ErrorOf([&] { options.Check(); }),
+              ::testing::AllOf(HasSubstr("--mask-dilate"), HasSubstr("5000"),
+                               HasSubstr(std::to_string(semantic::kMaxDilatePx))));
+  options.dilate_px = semantic::kMaxDilatePx;
+  EXPECT_NO_THROW(options.Check());
   options = {};
   options.kind = MaskSourceKind::kFiles;
   EXPECT_THAT(ErrorOf([&] { options.Check(); }), HasSubstr("--mask-source files"));
@@ -219,7 +227,7 @@ TEST(MaskSourceTest, NetworkSourcesCheckTheirOptionsAndTheCardsKind) {
   options.kind = MaskSourceKind::kModel;
   options.model_card = dir.Write("onnx.yaml",
                                  "%YAML:1.0\ntype: segmentation\nmodel: net.mnet\n"
-                                 "input_width: 8\ninput_height: 8\nclasses: [a, b]\n"
+                                 "input_width: 64\ninput_height: 64\nclasses: [a, b]\n"
                                  "movable: [b]\n");
   EXPECT_THAT(ErrorOf([&] { MakeMaskSource(options, none); }),
               ::testing::AllOf(HasSubstr("onnx.yaml"), HasSubstr("torch card")));

@@ -187,6 +187,27 @@ void WriteFramesCsv(const RunResult& result, const std::string& path) {
   CheckWritten(out, path);
 }
 
+namespace {
+
+// The ground truth as EvaluateRun compares with it: with the stamps of times.txt when it has none.
+eval::Trajectory ReadGroundTruth(const io::Sequence& sequence) {
+  eval::Trajectory gt = eval::ReadTrajectory(*sequence.ground_truth_path);
+  const std::string times = (fs::path(sequence.root) / "times.txt").string();
+  std::error_code ec;
+  if (!gt.has_timestamps() && fs::exists(times, ec)) eval::AttachTimes(times, &gt);
+  return gt;
+}
+
+}  // namespace
+
+void CheckGroundTruth(const io::Sequence& sequence) {
+  if (!sequence.ground_truth_path) return;
+  const eval::Trajectory gt = ReadGroundTruth(sequence);
+  if (gt.empty()) {
+    ThrowInFile(*sequence.ground_truth_path, "the data set's ground truth holds no valid pose");
+  }
+}
+
 std::optional<RunAte> EvaluateRun(const io::Sequence& sequence, const std::string& camera_path,
                                   const std::string& plot_path) {
   if (!sequence.ground_truth_path) return std::nullopt;

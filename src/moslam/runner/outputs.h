@@ -56,6 +56,11 @@ struct RunAte {
   std::string text;     // eval::FormatAteReport
 };
 
+// Reads sequence.ground_truth_path (and <root>/times.txt for a ground truth without stamps) as
+// EvaluateRun will, so that a broken file fails before the run, not as a warning after it:
+// InputError naming the file (and line). Does nothing without a ground truth.
+void CheckGroundTruth(const io::Sequence& sequence);
+
 // ATE of `camera_path` (the TUM file just written) against sequence.ground_truth_path, matched
 // by timestamp: a ground truth without stamps (KITTI poses.txt) takes those of <root>/times.txt.
 // Writes the trajectory plot to `plot_path` when it is not empty. nullopt, with a warning, when

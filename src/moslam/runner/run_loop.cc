@@ -23,6 +23,17 @@ double MsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
+// Tracks one frame; an InputError from inside the tracker (an image it cannot use) is given
+// the frame's index and image file, which the tracker does not know.
+slam::FrameReport TrackFrame(Tracker& tracker, const LoadedFrame& frame) {
+  try {
+    return tracker.Track(frame.input);
+  } catch (const InputError& e) {
+    const std::string image = frame.entry != nullptr ? frame.entry->image_left : "?";
+    ThrowInFile(image, fmt::format("frame {}: {}", frame.index, e.what()));
+  }
+}
+
 }  // namespace
 
 const char* StateName(slam::TrackingState state) {
@@ -64,6 +75,10 @@ void RunOptions::Check() const {
   if (queue_capacity == 0) ThrowInput("run.queue_capacity: must be > 0");
   if (!(depth_factor > 0.0)) ThrowInput("run.depth_factor: must be > 0, got {}", depth_factor);
   if (segment_every < 1) ThrowInput("--segment-every: must be >= 1, got {}", segment_every);
+  if (image_size.width < 0 || image_size.height < 0) {
+    ThrowInput("run.image_size: must not be negative, got {}x{}", image_size.width,
+               image_size.height);
+  }
 }
 
 LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options) {
@@ -73,6 +88,15 @@ LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options) {
   const auto start = Clock::now();
   io::FrameImages images = io::LoadFrameImages(frame, options.colour, options.depth_factor);
   loaded.load_ms = MsSince(start);
+  // LoadFrameImages makes the right and depth images agree with the left one.
+  if (!options.image_size.empty() && images.left.size() != options.image_size) {
+    ThrowInFile(
+        frame.image_left,
+        fmt::format("frame {}: the image is {}x{}, but Camera.width x Camera.height in {} are "
+                    "{}x{}, the size its intrinsics are for",
+                    frame.index, images.left.cols, images.left.rows, options.image_size_source,
+                    options.image_size.width, options.image_size.height));
+  }
   loaded.input.timestamp = frame.timestamp;
   loaded.input.image = std::move(images.left);
   loaded.input.right = std::move(images.right);
@@ -180,7 +204,7 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource
       record.crf_ms = frame->crf_ms;
       record.mask_fraction = frame->mask_fraction;
       record.segmented = due(*frame);
-      record.report = tracker.Track(frame->input);
+      record.report = TrackFrame(tracker, *frame);
       spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,
                     record.timestamp, StateName(record.report.state), record.report.num_features,
                     record.report.num_inliers, record.report.times.total_ms);

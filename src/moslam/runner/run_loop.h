@@ -43,6 +43,11 @@ struct RunOptions {
   // others reach the tracker without a mask, which carries the last one into them
   // (slam::SystemOptions::mask_propagation_frames; `moslam run --segment-every K`).
   int segment_every = 1;
+  // The size every image must have: the settings' Camera.width x Camera.height, for which their
+  // intrinsics hold (an image of another size would be tracked with wrong ones); 0x0: any size.
+  // `image_size_source` names where it comes from (the settings file) in the error.
+  cv::Size image_size;
+  std::string image_size_source = "the settings";
   void Check() const;  // InputError naming the field
 };
 

@@ -282,6 +282,62 @@ TEST(RunLoopTest, TrackerErrorStopsTheLoaderWithoutDeadlock) {
   EXPECT_EQ(tracker.masks.size(), 2u);
 }
 
+// Issue 31: images of another size than the settings' were tracked with intrinsics for the
+// wrong size; now the first such image fails the run, named with both sizes.
+TEST(RunLoopTest, AnImageOfAnotherSizeThanTheSettingsIsNamed) {
+  testing::TempDir data;
+  test::MakeTum(data, 6);
+  const std::string odd = data.path() + "/rgb/" + test::Stamp(3) + ".png";
+  test::WriteImage(data, "rgb/" + test::Stamp(3) + ".png", cv::Mat(8, 8, CV_8UC1, cv::Scalar(9)));
+  const io::Sequence seq = io::ReadDataset(data.path());
+  const auto masks = MakeMaskSource({}, seq);
+  RunOptions options = Quiet();
+  options.colour = io::ColourMode::kGrey;
+  options.image_size = cv::Size(test::kCols, test::kRows);
+  options.image_size_source = "settings.yaml";
+  // Its depth map too, so that the pair agrees and only the settings' size is wrong.
+  test::WriteImage(data, "depth/" + test::Stamp(3) + ".png",
+                   cv::Mat(8, 8, CV_16UC1, cv::Scalar(5000)));
+  FakeTracker tracker;
+  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, options); }),
+              ::testing::AllOf(HasSubstr(odd), HasSubstr("frame 3"), HasSubstr("8x8"),
+                               HasSubstr("settings.yaml"), HasSubstr("24x16")));
+  EXPECT_EQ(tracker.masks.size(), 3u);
+  // The whole sequence at another size fails at its first frame.
+  FakeTracker other;
+  options.image_size = cv::Size(2 * test::kCols, 2 * test::kRows);
+  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, other, *masks, options); }),
+              ::testing::AllOf(HasSubstr(data.path() + "/rgb/" + test::Stamp(0) + ".png"),
+                               HasSubstr("48x32")));
+  EXPECT_TRUE(other.masks.empty());
+}
+
+TEST(RunLoopTest, AnInputErrorOfTheTrackerNamesTheFrameAndImage) {
+  testing::TempDir data;
+  test::MakeKitti(data, 5);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  const auto masks = MakeMaskSource({}, seq);
+  FakeTracker tracker;
+  tracker.before_track = [](int i) {
+    if (i == 2) ThrowInput("ORB extractor: the image is 16x16, smaller than the minimum 64x64");
+  };
+  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, Quiet()); }),
+              ::testing::AllOf(HasSubstr(data.path() + "/image_0/000002.png"), HasSubstr("frame 2"),
+                               HasSubstr("smaller than the minimum")));
+}
+
+TEST(RunLoopTest, ABrokenGroundTruthIsFoundBeforeTheRun) {
+  testing::TempDir data;
+  test::MakeTum(data, 3);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  EXPECT_NO_THROW(CheckGroundTruth(seq));
+  const std::string gt =
+      data.Write("groundtruth.txt", "100.0 1 2 3 0 0 0 1\n100.1 1 2 x 0 0 0 1\n");
+  EXPECT_THAT(ErrorOf([&] { CheckGroundTruth(seq); }), HasSubstr(gt + ":2:"));
+  data.Write("groundtruth.txt", "# nothing\n");
+  EXPECT_THAT(ErrorOf([&] { CheckGroundTruth(seq); }), HasSubstr(gt));
+}
+
 TEST(RunLoopTest, RealtimeIsNeverAheadOfTheTimestamps) {
   testing::TempDir data;
   test::MakeKitti(data, 4);  // 0.3 s of data

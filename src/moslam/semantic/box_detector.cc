@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
 
 #include <fmt/ranges.h>
 
@@ -13,6 +16,7 @@ using internal::Clock;
 using internal::MsSince;
 using internal::ReadNet;
 using internal::RefineText;
+using internal::RunNetwork;
 
 namespace {
 
@@ -31,6 +35,44 @@ std::vector<int> PlaneOf(const ModelCard& card, std::vector<std::string>* names)
 }
 
 }  // namespace
+
+namespace internal {
+
+void CheckDarknetWeightsSize(const ModelCard& card, const cv::dnn::Net& net) {
+  // Darknet's header: major, minor, revision (int32), then the images seen: a uint64 from
+  // version 0.2 on, an int32 before (as OpenCV's reader and Darknet's load_weights read it).
+  std::ifstream in(card.model, std::ios::binary);
+  int32_t version[3] = {0, 0, 0};
+  if (!in.read(reinterpret_cast<char*>(version), sizeof(version))) {
+    ThrowInFile(card.model,
+                fmt::format("too short for Darknet weights (no header; card {})", card.path));
+  }
+  const uintmax_t header = sizeof(version) + (version[0] * 10 + version[1] >= 2 ? 8 : 4);
+  // What the layers that OpenCV's reader fills from the file hold (convolutions, their batch
+  // normalizations, fully connected layers); other layers' blobs come from the .cfg (a Region
+  // layer's anchors).
+  uintmax_t expected = 0;
+  for (const std::string& name : net.getLayerNames()) {
+    const cv::Ptr<cv::dnn::Layer> layer = net.getLayer(name);
+    if (layer->type != "Convolution" && layer->type != "BatchNorm" &&
+        layer->type != "InnerProduct") {
+      continue;
+    }
+    for (const cv::Mat& blob : layer->blobs) expected += blob.total() * blob.elemSize();
+  }
+  std::error_code error;
+  const uintmax_t size = std::filesystem::file_size(card.model, error);
+  if (error || size < header + expected) {
+    ThrowInFile(
+        card.model,
+        fmt::format("holds {} bytes, but the network of {} (config {}) needs {} (a {}-byte "
+                    "header and {} bytes of weights): the file is truncated or belongs to "
+                    "another network",
+                    error ? 0 : size, card.path, card.config, header + expected, header, expected));
+  }
+}
+
+}  // namespace internal
 
 BoxDetector::BoxDetector(const ModelCard& card, const RefineOptions& refine)
     : card_(card),
@@ -88,7 +130,10 @@ Prediction BoxDetector::Predict(const MaskInput& input) {
   std::vector<int> ids;
   std::vector<float> confidences;
   std::vector<cv::Rect> boxes;
-  model_.detect(bgr, ids, confidences, boxes, card_.confidence, card_.nms);
+  RunNetwork(card_, [&] {
+    model_.detect(bgr, ids, confidences, boxes, card_.confidence, card_.nms);
+    return 0;
+  });
   Prediction result;
   const cv::Rect bounds(0, 0, bgr.cols, bgr.rows);
   for (size_t i = 0; i < ids.size(); ++i) {

@@ -1,12 +1,16 @@
 // The ONNX segmentation and detector providers on the shared models and CamVid images (skipped
 // with a message when MOSLAM_SHARED does not hold them): shapes, class mapping, mask polarity.
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "moslam/semantic/mask_provider.h"
+#include "moslam/testing/error_of.h"
 #include "moslam/testing/shared_data.h"
 
 namespace moslam::semantic {
@@ -100,6 +104,27 @@ TEST(BoxDetector, YoloFastestBoxesCoverTheCarsOfACamVidImage) {
   EXPECT_GT(cars, 0) << "Yolo-Fastest found no car";
   // The boxes hold most car pixels (recall), though they cover background too.
   EXPECT_GT(cv::countNonZero(r.mask & example.cars), 0.5 * cv::countNonZero(example.cars));
+}
+
+// Issue 31: OpenCV's Darknet reader takes a short weights file without a word; the weights file
+// is compared with what the network's layers hold.
+TEST(BoxDetector, TruncatedDarknetWeightsAreRefused) {
+  MOSLAM_SHARED_OR_SKIP(model, "models/yolo_fastest_coco/yolo-fastest-1.1-xl.weights");
+  MOSLAM_SHARED_OR_SKIP(cfg, "models/yolo_fastest_coco/yolo-fastest-1.1-xl.cfg");
+  ModelCard card =
+      LoadModelCard("configs/models/yolo_fastest_coco.yaml", ::moslam::testing::SharedRoot());
+  std::ifstream in(model, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1000u);
+  testing::TempDir dir;
+  for (const size_t size : {size_t{100}, bytes.size() - 4}) {
+    card.model = dir.Write("short.weights", bytes.substr(0, size));
+    EXPECT_THAT(testing::ErrorOf([&] { MakeMaskProvider(card, card.refine); }),
+                ::testing::AllOf(::testing::HasSubstr(card.model),
+                                 ::testing::HasSubstr("yolo_fastest_coco.yaml"),
+                                 ::testing::HasSubstr(std::to_string(size))))
+        << size;
+  }
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
+#include "moslam/semantic/input_limits.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
 #include "moslam/util/strings.h"
@@ -69,7 +70,9 @@ void RefineOptions::Check() const {
   if (!(std::abs(movable_bias) <= 10.0f)) {
     ThrowInput("refine.movable_bias: must be in [-10, 10] (nats), got {}", movable_bias);
   }
-  if (dilate_px < 0) ThrowInput("refine.dilate_px: must be >= 0, got {}", dilate_px);
+  if (dilate_px < 0 || dilate_px > kMaxDilatePx) {
+    ThrowInput("refine.dilate_px: must be in [0, {}] pixels, got {}", kMaxDilatePx, dilate_px);
+  }
   crf_options.Check();
 }
 

@@ -8,7 +8,9 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "moslam/semantic/input_limits.h"
 #include "moslam/util/error.h"
+#include "moslam/util/strings.h"
 #include "moslam/util/yaml.h"
 
 namespace moslam::semantic {
@@ -21,7 +23,7 @@ std::string ResolvePath(const std::string& value, const std::string& key, const 
   std::error_code ec;
   if (given.is_absolute()) {
     if (!fs::exists(given, ec))
-      ThrowInFile(card.path, fmt::format("{}: {} does not exist", key, value));
+      ThrowInFile(card.path, fmt::format("{}: {} does not exist", key, Excerpt(value, 400)));
     return value;
   }
   const fs::path beside = fs::path(card.path).parent_path() / given;
@@ -30,7 +32,8 @@ std::string ResolvePath(const std::string& value, const std::string& key, const 
   if (fs::exists(shared, ec)) return shared.string();
   ThrowInFile(card.path, fmt::format("{}: '{}' found neither at {} nor at {} (set MOSLAM_SHARED "
                                      "to the folder that holds models/)",
-                                     key, value, beside.string(), shared.string()));
+                                     key, Excerpt(value, 400), Excerpt(beside.string(), 400),
+                                     Excerpt(shared.string(), 400)));
 }
 
 void CheckClassNames(const ModelCard& card) {
@@ -38,8 +41,24 @@ void CheckClassNames(const ModelCard& card) {
   for (const std::string& name : card.classes) {
     if (name.empty()) ThrowInFile(card.path, "classes: a class name is empty");
     if (!seen.insert(name).second) {
-      ThrowInFile(card.path, fmt::format("classes: '{}' is listed twice", name));
+      ThrowInFile(card.path, fmt::format("classes: '{}' is listed twice", Excerpt(name)));
     }
+  }
+}
+
+void CheckInputSize(const ModelCard& card) {
+  const int w = card.input_width;
+  const int h = card.input_height;
+  if (w < kMinCardInputSide || h < kMinCardInputSide || w > kMaxCardInputSide ||
+      h > kMaxCardInputSide) {
+    ThrowInFile(card.path, fmt::format("input_width, input_height: {}x{}, each must be in [{}, {}] "
+                                       "pixels",
+                                       w, h, kMinCardInputSide, kMaxCardInputSide));
+  }
+  if (!card.config.empty() && (w % kDarknetInputMultiple != 0 || h % kDarknetInputMultiple != 0)) {
+    ThrowInFile(card.path, fmt::format("input_width, input_height: {}x{}, a Darknet network needs "
+                                       "multiples of {}",
+                                       w, h, kDarknetInputMultiple));
   }
 }
 
@@ -66,10 +85,7 @@ void ModelCard::Check() const {
   // A torch card's model file says what the card leaves out (net::CompleteTorchCard).
   const bool torch = kind == ModelKind::kTorch;
   const bool size_from_model = torch && input_width == 0 && input_height == 0;
-  if (!size_from_model && (input_width <= 0 || input_height <= 0)) {
-    ThrowInFile(path, fmt::format("input_width, input_height: must be > 0, got {}x{}", input_width,
-                                  input_height));
-  }
+  if (!size_from_model) CheckInputSize(*this);
   if (mean.size() != 3) ThrowInFile(path, "mean: give 3 numbers, one per channel");
   if (!(scale > 0.0)) ThrowInFile(path, fmt::format("scale: must be > 0, got {}", scale));
   const bool classes_from_model = torch && classes.empty();
@@ -83,11 +99,12 @@ void ModelCard::Check() const {
   if (movable.empty() && !torch) ThrowInFile(path, "movable: no movable class listed");
   for (const std::string& name : classes_from_model ? std::vector<std::string>() : movable) {
     if (std::find(classes.begin(), classes.end(), name) == classes.end()) {
-      ThrowInFile(path, fmt::format("movable: '{}' is not one of the classes", name));
+      ThrowInFile(path, fmt::format("movable: '{}' is not one of the classes", Excerpt(name)));
     }
   }
   if (!background.empty() && BackgroundIndex() < 0) {
-    ThrowInFile(path, fmt::format("background: '{}' is not one of the classes", background));
+    ThrowInFile(path,
+                fmt::format("background: '{}' is not one of the classes", Excerpt(background)));
   }
   if (!(confidence > 0.0f && confidence < 1.0f)) ThrowInFile(path, "confidence: must be in (0, 1)");
   if (!(nms > 0.0f && nms <= 1.0f)) ThrowInFile(path, "nms: must be in (0, 1]");
@@ -131,7 +148,8 @@ ModelCard LoadModelCard(const std::string& path, const std::string& shared_root)
   } else if (type == "torch") {
     card.kind = ModelKind::kTorch;
   } else {
-    ThrowInFile(path, fmt::format("type: '{}' is none of segmentation, detector and torch", type));
+    ThrowInFile(
+        path, fmt::format("type: '{}' is none of segmentation, detector and torch", Excerpt(type)));
   }
   card.model = ResolvePath(file.Required<std::string>("model"), "model", card, shared_root);
   std::string config;

@@ -2,6 +2,8 @@
 
 #include <filesystem>
 
+#include <fmt/format.h>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -128,6 +130,47 @@ TEST(ModelCard, TorchCardsTakeSizeAndClassesFromTheModelFile) {
                               "/none");
               }),
               HasSubstr("input_width"));
+}
+
+// Issue 31: sizes that failed inside OpenCV dnn (1x1, 7x5: "Inconsistent shape" in a concat
+// layer) or ran for minutes a frame (8000x6000) are refused with the keys and the card named.
+TEST(ModelCard, InputSizesOutsideTheLimitsAreRefused) {
+  testing::TempDir dir;
+  dir.Write("net.onnx", "x");
+  dir.Write("net.cfg", "x");
+  dir.Write("net.mnet", "x");
+  const auto card = [&](const std::string& head, int w, int h) {
+    return dir.Write("card.yaml", fmt::format("%YAML:1.0\n{}input_width: {}\ninput_height: {}\n"
+                                              "classes: [a, b]\nmovable: [b]\n",
+                                              head, w, h));
+  };
+  for (const std::string head :
+       {"type: segmentation\nmodel: net.onnx\n",
+        "type: detector\nmodel: net.onnx\nconfig: net.cfg\n", "type: torch\nmodel: net.mnet\n"}) {
+    for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {7, 5}, {8000, 6000}}) {
+      const std::string path = card(head, w, h);
+      EXPECT_THAT(ErrorOf([&] { LoadModelCard(path, "/none"); }),
+                  AllOf(HasSubstr(path), HasSubstr("input_width, input_height"),
+                        HasSubstr(fmt::format("{}x{}", w, h))))
+          << head << w << "x" << h;
+    }
+  }
+  // A Darknet detector needs multiples of 32; other networks take any size in the range.
+  const std::string darknet = card("type: detector\nmodel: net.onnx\nconfig: net.cfg\n", 100, 96);
+  EXPECT_THAT(ErrorOf([&] { LoadModelCard(darknet, "/none"); }),
+              AllOf(HasSubstr(darknet), HasSubstr("multiples of 32")));
+  EXPECT_NO_THROW(LoadModelCard(card("type: segmentation\nmodel: net.onnx\n", 513, 100), "/none"));
+}
+
+TEST(ModelCard, AnUnreadableCardIsNamed) {
+  testing::TempDir dir;
+  const std::string list = dir.Write("list.yaml", "%YAML:1.0\n- type: torch\n- model: x\n");
+  EXPECT_THAT(ErrorOf([&] { LoadModelCard(list, "/none"); }),
+              AllOf(HasSubstr(list), HasSubstr("top level")));
+  const std::string broken = dir.Write("broken.yaml", "%YAML:1.0\ntype: [torch\nmodel: {x\n");
+  EXPECT_THAT(ErrorOf([&] { LoadModelCard(broken, "/none"); }), HasSubstr(broken));
+  EXPECT_THAT(ErrorOf([&] { LoadModelCard(dir.path(), "/none"); }),
+              AllOf(HasSubstr(dir.path()), HasSubstr("is a directory")));
 }
 
 // The cards shipped in configs/models/ parse and name models that exist in the shared folder.

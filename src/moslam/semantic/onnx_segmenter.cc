@@ -11,6 +11,7 @@ using internal::Clock;
 using internal::MsSince;
 using internal::ReadNet;
 using internal::RefineText;
+using internal::RunNetwork;
 
 OnnxSegmenter::OnnxSegmenter(const ModelCard& card, const RefineOptions& refine)
     : card_(card),
@@ -24,8 +25,10 @@ Prediction OnnxSegmenter::Predict(const MaskInput& input) {
   const cv::Mat blob = cv::dnn::blobFromImage(
       bgr, card_.scale, cv::Size(card_.input_width, card_.input_height),
       cv::Scalar(card_.mean[0], card_.mean[1], card_.mean[2]), card_.rgb, false, CV_32F);
-  net_.setInput(blob);
-  cv::Mat out = net_.forward();
+  cv::Mat out = RunNetwork(card_, [&] {
+    net_.setInput(blob);
+    return net_.forward();
+  });
   const int num = static_cast<int>(card_.classes.size());
   if (out.dims != 4 || out.size[0] != 1 || out.size[1] != num || out.type() != CV_32F) {
     ThrowInFile(card_.path, fmt::format("the model's output is not 1 x {} x H x W float logits "

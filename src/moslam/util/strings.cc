@@ -4,6 +4,8 @@
 #include <cerrno>
 #include <cstdlib>
 
+#include <fmt/format.h>
+
 namespace moslam {
 
 std::string_view Trim(std::string_view s) {
@@ -65,6 +67,11 @@ std::string ToLower(std::string_view s) {
   std::string out(s);
   for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return out;
+}
+
+std::string Excerpt(std::string_view s, size_t max_chars) {
+  if (s.size() <= max_chars) return std::string(s);
+  return fmt::format("{}... ({} characters)", s.substr(0, max_chars), s.size());
 }
 
 }  // namespace moslam

@@ -18,5 +18,9 @@ std::optional<long long> ParseInt(std::string_view s);
 bool StartsWith(std::string_view s, std::string_view prefix);
 bool EndsWith(std::string_view s, std::string_view suffix);
 std::string ToLower(std::string_view s);
+// `s` for an error message: whole when it has at most `max_chars` characters, else its first
+// `max_chars` followed by "..." (and the full length), so that one bad line of a file, which may
+// be megabytes without a newline, cannot make a message megabytes long.
+std::string Excerpt(std::string_view s, size_t max_chars = 80);
 
 }  // namespace moslam

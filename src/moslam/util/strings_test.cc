@@ -42,5 +42,14 @@ TEST(Strings, Affixes) {
   EXPECT_EQ(ToLower("TrUe"), "true");
 }
 
+TEST(Strings, ExcerptBoundsQuotedInput) {
+  EXPECT_EQ(Excerpt("short line"), "short line");
+  EXPECT_EQ(Excerpt(std::string(80, 'a')), std::string(80, 'a'));
+  const std::string long_line(8'000'000, 'x');
+  const std::string e = Excerpt(long_line);
+  EXPECT_EQ(e, std::string(80, 'x') + "... (8000000 characters)");
+  EXPECT_EQ(Excerpt("abcdef", 3), "abc... (6 characters)");
+}
+
 }  // namespace
 }  // namespace moslam

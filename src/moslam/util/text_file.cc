@@ -27,6 +27,9 @@ std::vector<TextLine> ReadDataLines(const std::string& path) {
 
 void RequireFile(const std::string& path, const std::string& what) {
   std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    ThrowInFile(path, fmt::format("is a directory, not a {}", what));
+  }
   if (!std::filesystem::is_regular_file(path, ec)) {
     ThrowInFile(path, fmt::format("{} not found (or not a regular file)", what));
   }

@@ -35,21 +35,83 @@ void Flatten(const cv::FileNode& node, const std::string& prefix,
   }
 }
 
+// Whether `token` is a number OpenCV reads with strtol's base 0: hexadecimal (0x1f) or octal
+// (017, read as 15), never what a user who writes them into a settings file means.
+bool IsNonDecimalNumber(std::string_view token) {
+  if (!token.empty() && (token[0] == '+' || token[0] == '-')) token.remove_prefix(1);
+  if (token.size() < 2 || token[0] != '0') return false;
+  const char c = token[1];
+  return c == 'x' || c == 'X' || (c >= '0' && c <= '9');
+}
+
+// Throws InputError at the first unquoted hexadecimal or octal number, naming the line's key.
+void RejectNonDecimalNumbers(const std::string& path) {
+  for (const TextLine& line : ReadDataLines(path)) {
+    const std::string& text = line.text;
+    const size_t colon = text.find(':');
+    std::string key =
+        colon == std::string::npos ? std::string() : std::string(Trim(text.substr(0, colon)));
+    size_t i = 0;
+    while (i < text.size()) {
+      const char c = text[i];
+      if (c == '#' && (i == 0 || text[i - 1] == ' ' || text[i - 1] == '\t')) break;  // comment
+      if (c == '"' || c == '\'') {  // a quoted string is text, whatever it holds
+        const size_t close = text.find(c, i + 1);
+        if (close == std::string::npos) break;
+        i = close + 1;
+        continue;
+      }
+      const size_t end = text.find_first_of(" \t,[]{}:#\"'", i);
+      const size_t stop = end == std::string::npos ? text.size() : end;
+      if (stop == i) {
+        ++i;
+        continue;
+      }
+      const std::string_view token(text.data() + i, stop - i);
+      if (IsNonDecimalNumber(token)) {
+        ThrowAtLine(
+            path, line.number,
+            fmt::format("{}'{}' is not a decimal number (hexadecimal and octal numbers are "
+                        "not accepted; write it in decimal)",
+                        key.empty() ? std::string() : fmt::format("key '{}': ", Excerpt(key)),
+                        Excerpt(token)));
+      }
+      i = stop;
+    }
+  }
+}
+
 [[noreturn]] void WrongType(const std::string& path, const std::string& key, const char* expected) {
-  ThrowInFile(path, fmt::format("key '{}' must be {}", key, expected));
+  ThrowInFile(path, fmt::format("key '{}' must be {}", Excerpt(key), expected));
 }
 
 }  // namespace
 
 YamlFile::YamlFile(const std::string& path) : path_(path), impl_(std::make_unique<Impl>()) {
-  RequireFile(path, "options file");
+  RequireFile(path, "YAML options file");
+  // OpenCV's parser reports some malformed input with other exceptions than cv::Exception
+  // (std::length_error from a string it sizes from garbage): all of them are bad input here.
   try {
     impl_->storage.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
-    ThrowInFile(path, fmt::format("is not valid YAML: {}", e.err));
+    ThrowInFile(path, fmt::format("is not valid YAML: {}", Excerpt(e.err)));
+  } catch (const std::exception& e) {
+    ThrowInFile(path, fmt::format("is not valid YAML ({})", Excerpt(e.what())));
   }
   if (!impl_->storage.isOpened()) ThrowInFile(path, "cannot be parsed as YAML");
-  Flatten(impl_->storage.root(), "", &impl_->leaves);
+  // After the parse, so that a binary file is reported as not YAML rather than quoted.
+  RejectNonDecimalNumbers(path);
+  const cv::FileNode root = impl_->storage.root();
+  // Options are named keys; a list (or a lone scalar) at the top has no key to name, and
+  // iterating it as a map trips an assertion inside OpenCV.
+  if (!root.isMap() && !root.isNone()) {
+    ThrowInFile(path, "the top level must be a map of 'key: value' lines, not a list or a value");
+  }
+  try {
+    Flatten(root, "", &impl_->leaves);
+  } catch (const std::exception& e) {
+    ThrowInFile(path, fmt::format("cannot be read as options: {}", Excerpt(e.what())));
+  }
 }
 
 YamlFile::~YamlFile() = default;
@@ -193,7 +255,7 @@ void YamlFile::RejectUnread() const {
     if (read_.count(key)) continue;
     bool ignored = false;
     for (const std::string& prefix : ignored_prefixes_) ignored |= StartsWith(key, prefix);
-    if (!ignored) ThrowInFile(path_, fmt::format("unknown key '{}' (misspelt?)", key));
+    if (!ignored) ThrowInFile(path_, fmt::format("unknown key '{}' (misspelt?)", Excerpt(key)));
   }
 }
 

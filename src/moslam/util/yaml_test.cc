@@ -88,5 +88,45 @@ TEST(YamlFile, MissingOrMalformedFileIsAnInputError) {
   EXPECT_THAT(ErrorOf([&] { YamlFile f(bad); }), HasSubstr("bad.yaml"));
 }
 
+// Issue 31: OpenCV reads "0x217" as 535 and "017" as 15; an options file never means them.
+TEST(YamlFile, HexadecimalAndOctalNumbersAreRefusedNamingKeyAndLine) {
+  testing::TempDir dir;
+  const std::string hex = dir.Write("hex.yaml", "%YAML:1.0\na: 1\nCamera.fx: 0x217\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(hex); }),
+              AllOf(HasSubstr(hex + ":3:"), HasSubstr("Camera.fx"), HasSubstr("0x217"),
+                    HasSubstr("decimal")));
+  const std::string octal = dir.Write("octal.yaml", "%YAML:1.0\nlist: [1, -017]\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(octal); }),
+              AllOf(HasSubstr(octal + ":2:"), HasSubstr("list"), HasSubstr("-017")));
+  // Decimal numbers, quoted text and comments may hold anything.
+  const std::string fine =
+      dir.Write("fine.yaml",
+                "%YAML:1.0\na: 0.5\nb: 0\nc: -0.25e-3\nd: \"0x1f\"\ne: '017' # 0x2 in a comment\n");
+  YamlFile f(fine);
+  EXPECT_DOUBLE_EQ(f.Required<double>("a"), 0.5);
+  EXPECT_EQ(f.Required<int>("b"), 0);
+  EXPECT_DOUBLE_EQ(f.Required<double>("c"), -0.25e-3);
+  EXPECT_EQ(f.Required<std::string>("d"), "0x1f");
+  EXPECT_EQ(f.Required<std::string>("e"), "017");
+}
+
+TEST(YamlFile, AListAtTheTopOrADirectoryIsNamed) {
+  testing::TempDir dir;
+  const std::string list = dir.Write("list.yaml", "%YAML:1.0\n- a\n- b\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(list); }), AllOf(HasSubstr(list), HasSubstr("top level")));
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(dir.path()); }),
+              AllOf(HasSubstr(dir.path()), HasSubstr("is a directory")));
+}
+
+TEST(YamlFile, AHugeKeyIsQuotedAsAnExcerpt) {
+  testing::TempDir dir;
+  const std::string key(1 << 20, 'k');
+  const std::string path = dir.Write("huge.yaml", "%YAML:1.0\n" + key + ": 1\n");
+  YamlFile f(path);
+  const std::string message = ErrorOf([&] { f.RejectUnread(); });
+  EXPECT_THAT(message, AllOf(HasSubstr(path), HasSubstr("unknown key"), HasSubstr("...")));
+  EXPECT_LT(message.size(), 400u);
+}
+
 }  // namespace
 }  // namespace moslam

@@ -2,8 +2,10 @@
 // ORBvoc.txt). The binary layout is documented in docs/VOCABULARY.md; everything is
 // little-endian, written byte by byte so that files are portable.
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
 #include "moslam/util/check.h"
@@ -64,6 +66,10 @@ class ByteReader {
 };
 
 std::string ReadWholeFile(const std::string& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    ThrowInFile(path, "is a directory, not a vocabulary file");
+  }
   std::ifstream file(path, std::ios::binary | std::ios::ate);
   if (!file) ThrowInFile(path, "cannot open vocabulary file");
   const std::streamoff size = file.tellg();
@@ -82,10 +88,14 @@ void CheckShape(const std::string& path, long k, long levels) {
   }
 }
 
-// Parses one non-negative integer at *p (skipping blanks); false if there is none.
+bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+// Parses one non-negative integer field at *p (skipping blanks); false if there is none. The
+// field must end at a blank or the end of the line: "0.5" is not the integer 0 followed by ".5"
+// (a node line one descriptor byte short would otherwise read its weight as a byte).
 bool ParseUnsigned(const char** p, const char* end, unsigned long* value) {
   const char* s = *p;
-  while (s < end && (*s == ' ' || *s == '\t' || *s == '\r')) ++s;
+  while (s < end && IsBlank(*s)) ++s;
   if (s == end || *s < '0' || *s > '9') return false;
   unsigned long v = 0;
   while (s < end && *s >= '0' && *s <= '9') {
@@ -93,10 +103,15 @@ bool ParseUnsigned(const char** p, const char* end, unsigned long* value) {
     if (v > 0xffffffffUL) return false;
     ++s;
   }
+  if (s < end && !IsBlank(*s)) return false;
   *p = s;
   *value = v;
   return true;
 }
+
+// TF-IDF weights are logarithms of N / n_i >= 1: finite and never negative. A NaN, infinite or
+// negative weight (a corrupt or hand-edited file) would poison every score that uses the word.
+bool IsValidWeight(double weight) { return std::isfinite(weight) && weight >= 0.0; }
 
 }  // namespace
 
@@ -191,7 +206,13 @@ void Vocabulary::LoadBinary(const std::string& path, const std::string& bytes) {
     if (flag > 1) ThrowInFile(path, fmt::format("node {}: bad leaf flag {}", i, flag));
     leaf[i] = flag == 1;
     std::memcpy(node.descriptor, in.Take(32), 32);
-    if (leaf[i]) node.weight = in.F64();
+    if (leaf[i]) {
+      node.weight = in.F64();
+      if (!IsValidWeight(node.weight)) {
+        ThrowInFile(path,
+                    fmt::format("node {}: weight {} is not a finite number >= 0", i, node.weight));
+      }
+    }
   }
   if (in.remaining() != 0) {
     ThrowInFile(path, fmt::format("{} unexpected bytes after the last node", in.remaining()));
@@ -254,6 +275,9 @@ void Vocabulary::LoadDbow2Text(const std::string& path, const std::string& bytes
     errno = 0;
     node.weight = std::strtod(rest.c_str(), &weight_end);
     if (weight_end == rest.c_str() || errno != 0) ThrowAtLine(path, line, "expected a weight");
+    if (!IsValidWeight(node.weight)) {
+      ThrowAtLine(path, line, fmt::format("weight {} is not a finite number >= 0", node.weight));
+    }
     for (const char* t = weight_end; *t != '\0'; ++t) {
       if (*t != ' ' && *t != '\t' && *t != '\r') ThrowAtLine(path, line, "extra text after weight");
     }

@@ -1,4 +1,6 @@
+#include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -145,6 +147,50 @@ TEST(VocabularyIo, MalformedDbow2TextNamesFileAndLine) {
   EXPECT_THAT(testing::ErrorOf([&] { Vocabulary::Load(no_weight); }), HasSubstr("weight"));
   const std::string leafless = dir.Write("g.txt", "2 2 0 0\n" + Dbow2Line(0, 0, 0, 0, "0"));
   EXPECT_THAT(testing::ErrorOf([&] { Vocabulary::Load(leafless); }), HasSubstr("no children"));
+}
+
+// Issue 31: weights that are not finite or are negative were loaded and used in every score.
+TEST(VocabularyIo, NonFiniteOrNegativeWeightsAreRefusedNamingNodeOrLine) {
+  testing::TempDir dir;
+  for (const char* weight : {"nan", "inf", "-0.5"}) {
+    std::string text = "2 2 0 0\n" + Dbow2Line(0, 0, 0, 0, "0") + Dbow2Line(0, 0, 255, 255, "0") +
+                       Dbow2Line(1, 1, 0, 0, "0.5") + Dbow2Line(1, 1, 255, 0, weight) +
+                       Dbow2Line(2, 1, 0, 255, "0.75") + Dbow2Line(2, 1, 255, 255, "2e-1");
+    const std::string path = dir.Write("w.txt", text);
+    EXPECT_THAT(testing::ErrorOf([&] { Vocabulary::Load(path); }),
+                ::testing::AllOf(HasSubstr(path + ":5:"), HasSubstr("weight")))
+        << weight;
+  }
+  // The binary format: the tiny tree's first word (node 3) keeps its weight in bytes 139-146
+  // (header 28 bytes, two inner nodes of 37, then node 3's parent, flag and descriptor).
+  const std::string text_path = dir.Write("tiny.txt", TinyDbow2Text());
+  const std::string binary = dir.path() + "/tiny.mvoc";
+  Vocabulary::Load(text_path).Save(binary);
+  const std::string bytes = ReadBytes(binary);
+  for (const double weight : {std::nan(""), HUGE_VAL, -1.0}) {
+    std::string damaged = bytes;
+    ASSERT_EQ(std::memcmp(damaged.data() + 139, "\0\0\0\0\0\0\xe0\x3f", 8), 0);  // 0.5
+    std::memcpy(damaged.data() + 139, &weight, 8);  // little-endian, as the format
+    const std::string path = dir.Write("w.mvoc", damaged);
+    EXPECT_THAT(testing::ErrorOf([&] { Vocabulary::Load(path); }),
+                ::testing::AllOf(HasSubstr(path), HasSubstr("node 3"), HasSubstr("weight")))
+        << weight;
+  }
+}
+
+TEST(VocabularyIo, TextNodeLinesAreParsedStrictly) {
+  // 31 descriptor bytes: "0.5" must not be read as the 32nd byte 0 and the weight ".5".
+  testing::TempDir dir;
+  std::string line = "1 1";
+  for (int i = 0; i < 31; ++i) line += " 7";
+  const std::string path =
+      dir.Write("short.txt", "2 2 0 0\n" + Dbow2Line(0, 0, 0, 0, "0") + line + " 0.5\n");
+  EXPECT_THAT(testing::ErrorOf([&] { Vocabulary::Load(path); }),
+              ::testing::AllOf(HasSubstr(path + ":3:"), HasSubstr("32 descriptor bytes")));
+  const std::string glued = dir.Write("glued.txt", "2 2 0 0\n0 1x 0" + std::string(" 1") + "\n");
+  EXPECT_THAT(testing::ErrorOf([&] { Vocabulary::Load(glued); }), HasSubstr(glued + ":2:"));
+  EXPECT_THAT(testing::ErrorOf([&] { Vocabulary::Load(dir.path()); }),
+              ::testing::AllOf(HasSubstr(dir.path()), HasSubstr("is a directory")));
 }
 
 }  // namespace

@@ -131,7 +131,8 @@ ImageList ReadImageList(const std::string& path, ImageList classes) {
     std::error_code ec;
     if (!fs::is_regular_file(entry.image, ec)) {
       ThrowAtLine(path, line.number,
-                  fmt::format("image '{}' does not exist (looked for {})", fields[0], entry.image));
+                  fmt::format("image '{}' does not exist (looked for {})", Excerpt(fields[0]),
+                              Excerpt(entry.image, 400)));
     }
     for (size_t i = 1; i < fields.size(); ++i) {
       if (fields[i].front() == '#') break;  // trailing comment
@@ -139,8 +140,9 @@ ImageList ReadImageList(const std::string& path, ImageList classes) {
       if (!list.background.empty() && name == list.background) continue;
       const int c = list.ClassIndex(name);
       if (c < 0) {
-        ThrowAtLine(path, line.number,
-                    fmt::format("unknown class '{}' (classes: {})", name, JoinNames(list)));
+        ThrowAtLine(
+            path, line.number,
+            fmt::format("unknown class '{}' (classes: {})", Excerpt(name), JoinNames(list)));
       }
       entry.classes.push_back(c);
     }
