@@ -155,17 +155,26 @@ TEST(Relocalization, ThirtyFrameGapRgbd) {
 
   MapSummary summary;
   const auto d = FeedSteps(*s, dropped, voc, &summary);
-  // Relocalized within one frame of the gap's end; from then on every frame is tracked.
+  // Tracked across the gap, or relocalized within one frame of its end; from then on every frame
+  // is tracked. The pose consensus (optim/pose_consensus.h) finds the frame after the gap from
+  // its own matches, as a sampled pose beats the stale prediction: no loss at all then.
   size_t k = kGapFirst;
-  if (!d[k].relocalized) {
-    EXPECT_EQ(d[k].state, TrackingState::kLost);
-    ++k;
+  const bool tracked_across =
+      d[k].state == TrackingState::kOk && !d[k].relocalized && !d[k].recovered;
+  if (!tracked_across) {
+    if (!d[k].relocalized) {
+      EXPECT_EQ(d[k].state, TrackingState::kLost);
+      ++k;
+    }
+    ASSERT_TRUE(d[k].relocalized || d[k].recovered)
+        << "frame " << dropped[k].index << ": " << d[k].reason;
   }
-  ASSERT_TRUE(d[k].relocalized || d[k].recovered)
-      << "frame " << dropped[k].index << ": " << d[k].reason;
-  EXPECT_EQ(summary.relocalizations + summary.recoveries, 1);
+  EXPECT_EQ(summary.relocalizations + summary.recoveries, tracked_across ? 0 : 1);
   std::printf("dropped frames %zu-%zu: frame %zu %s (%d inliers), error %.4f m\n", kGapFirst,
-              kGapLast - 1, dropped[k].index, d[k].relocalized ? "relocalized" : "recovered",
+              kGapLast - 1, dropped[k].index,
+              tracked_across     ? "tracked"
+              : d[k].relocalized ? "relocalized"
+                                 : "recovered",
               d[k].num_inliers, PoseError(*s, d[k], dropped[k].index));
   for (; k < d.size(); ++k) {
     const size_t i = dropped[k].index;

@@ -77,6 +77,7 @@ TEST(SystemSynthetic, DegradedMasksStayWithinTwiceTheExactMasksError) {
       dir.path(), settings, true, 0, "moving",
       [](SystemOptions* o) {
         o->movable_evidence = o->free_space_evidence = o->moving_keypoint_check = false;
+        o->static_scores = o->moving_regions = o->pose_consensus = false;
         o->mask_margin_px = o->mask_propagation_frames = o->mask_completion_px = 0;
       },
       false, damage);
@@ -86,8 +87,9 @@ TEST(SystemSynthetic, DegradedMasksStayWithinTwiceTheExactMasksError) {
       exact.ate_rmse, degraded.ate_rmse, degraded.summary.movable_points_erased, bare.ate_rmse);
   EXPECT_EQ(degraded.frames_ok, 90);
   EXPECT_GT(degraded.summary.movable_points_erased, 0);
-  EXPECT_LT(degraded.ate_rmse, 2.0 * exact.ate_rmse);  // measured 0.0075 against 0.0051 m
-  // The damage matters: without the mechanisms the same masks give 0.098 m (measured).
+  EXPECT_LT(degraded.ate_rmse, 2.0 * exact.ate_rmse);  // measured 0.0065 against 0.0049 m
+  // The damage matters: without the mechanisms the same masks give 0.098 m (measured; 0.0143 m
+  // with only the geometric ones of static_scores.h, moving_regions.h and pose_consensus.h).
   EXPECT_GT(bare.ate_rmse, 3.0 * degraded.ate_rmse);
 }
 

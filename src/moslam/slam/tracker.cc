@@ -42,6 +42,8 @@ constexpr int kMinInliersAfterRelocalization = 50;
 // Votes in the pose consensus: 1 + min(age, kSupportAge) / kSupportUnit, age in seconds since the
 // tracker first matched the point: from 1 (new) to 5 (known for 10 s).
 constexpr double kSupportAge = 10.0, kSupportUnit = 2.5;
+// A frame more than this many regular intervals after the last tracked one follows a gap.
+constexpr double kGapIntervals = 3.0;
 
 }  // namespace
 
@@ -163,7 +165,12 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
   // the velocity spans the lost frames: the next frame tracks the reference keyframe too.
   have_velocity_ = !out.relocalized && !out.recovered;
   const double dt = current_.frame.timestamp - last_.frame.timestamp;
-  if (have_velocity_ && dt > 0.0) {
+  // Tracked across a gap in the stream (dropped frames; the pose consensus finds such frames
+  // from their own matches): the motion spans the gap, and as the next frame's prediction it
+  // would repeat all of it. Scale it to the last regular frame interval instead.
+  if (have_velocity_ && have_recovery_motion_ && dt > kGapIntervals * recovery_dt_) {
+    velocity_ = geometry::SE3::Exp((recovery_dt_ / dt) * velocity_.Log());
+  } else if (have_velocity_ && dt > 0.0) {
     recovery_motion_ = velocity_;
     recovery_dt_ = dt;
     have_recovery_motion_ = true;
