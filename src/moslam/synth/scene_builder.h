@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -258,26 +259,23 @@ class Builder {
 
   void AddPerson(const Person& p) {
     Actor a;
-    a.instance = NewInstance();
     a.kind = ActorKind::kPerson;
     a.person = p;
-    world_.actors.push_back(a);
+    AddActor(std::move(a));
   }
 
   void AddCar(const Car& c) {
     Actor a;
-    a.instance = NewInstance();
     a.kind = ActorKind::kCar;
     a.car = c;
-    world_.actors.push_back(a);
+    AddActor(std::move(a));
   }
 
   void AddCart(const Cart& c) {
     Actor a;
-    a.instance = NewInstance();
     a.kind = ActorKind::kCart;
     a.cart = c;
-    world_.actors.push_back(a);
+    AddActor(std::move(a));
   }
 
   // The box added last (to adjust what Add drew at random, such as its texture shift).
@@ -286,6 +284,12 @@ class Builder {
   const TextureSet& textures() const { return tex_; }
 
  private:
+  // Every actor gets the next instance id, in the order added (the random streams rely on it).
+  void AddActor(Actor a) {
+    a.instance = NewInstance();
+    world_.actors.push_back(std::move(a));
+  }
+
   World& world_;
   Rng& rng_;
   PeopleStyle style_ = PeopleStyle::kBoxes;
