@@ -57,6 +57,7 @@ struct RunArgs {
   bool no_moving_check = false;
   bool no_static_scores = false;
   bool no_moving_regions = false;
+  bool no_completion_planes = false;
   bool no_pose_consensus = false;
   int mask_margin = slam::SystemOptions{}.mask_margin_px;
   int mask_propagation = slam::SystemOptions{}.mask_propagation_frames;
@@ -120,6 +121,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.moving_keypoint_check = !args.no_moving_check;
   options.static_scores = !args.no_static_scores;
   options.moving_regions = !args.no_moving_regions;
+  options.completion_structure = !args.no_completion_planes;
   options.pose_consensus = !args.no_pose_consensus;
   options.mask_margin_px = args.mask_margin;
   options.mask_propagation_frames = args.mask_propagation;
@@ -327,6 +329,9 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--no-static-scores", args->no_static_scores,
                     "Give every matched map point full weight in pose optimization and keep "
                     "points whose residuals show them moving frame after frame (ablations)");
+  command->add_flag("--no-completion-planes", args->no_completion_planes,
+                    "RGB-D: let the mask completion grow onto the large planes of the depth image "
+                    "(floor, walls) too, bounded only by --mask-completion (ablations)");
   command->add_flag("--no-moving-regions", args->no_moving_regions,
                     "Do not turn clusters of keypoints found moving into mask regions carried "
                     "into the next frames (ablations)");

@@ -87,7 +87,8 @@ void MaskCompletionOptions::Check() const {
 }
 
 cv::Mat CompleteMaskByDepth(const cv::Mat& mask, const cv::Mat& depth,
-                            const MaskCompletionOptions& options) {
+                            const MaskCompletionOptions& options,
+                            const StructurePlanes* structure) {
   options.Check();
   MOSLAM_CHECK(mask.type() == CV_8UC1);
   MOSLAM_CHECK(depth.type() == CV_32FC1 && depth.size() == mask.size());
@@ -127,6 +128,7 @@ cv::Mat CompleteMaskByDepth(const cv::Mat& mask, const cv::Mat& depth,
       if (!valid(zn)) continue;
       if (std::abs(zn - z) > options.step_abs + options.step_rel * z) continue;
       if (std::abs(zn - item.seed_depth) > options.max_depth_range) continue;
+      if (structure != nullptr && structure->Contains(u, v, zn)) continue;
       m = 255;
       queue.push_back({u, v, item.steps + 1, item.seed_depth});
     }

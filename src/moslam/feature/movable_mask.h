@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 
 #include "moslam/camera/pinhole_camera.h"
+#include "moslam/feature/structure_planes.h"
 #include "moslam/geometry/se3.h"
 
 namespace moslam::feature {
@@ -37,9 +38,11 @@ cv::Mat WarpMask(const cv::Mat& values, const cv::Mat& depth, const camera::Pinh
                  const geometry::SE3& T_to_from);
 
 struct MaskCompletionOptions {
-  // Farthest a mask grows from where it was, in pixels (4-connected steps); 0 = off. Bounded so
-  // that a body that touches the floor cannot flood along it.
-  int max_grow_px = 12;
+  // Farthest a mask grows from where it was, in pixels (4-connected steps); 0 = off. Far enough
+  // to cover a body from its head (a person 1 m away is ~500 px tall); what keeps the growth off
+  // the floor the feet touch is the structure planes (CompleteMaskByDepth's `structure`), and
+  // without them this bound alone (12 px before 2026-12-03).
+  int max_grow_px = 400;
   // A neighbour joins when its depth differs from the pixel it is reached from by at most
   // step_abs + step_rel * depth (metres): a depth edge (a body in front of a wall) stops it.
   double step_abs = 0.02;
@@ -52,8 +55,11 @@ struct MaskCompletionOptions {
 
 // The mask (CV_8UC1, 0/255) grown over depth-connected pixels: breadth-first from the mask's
 // pixels with a valid depth, through 4-neighbours that pass both depth tests, up to max_grow_px
-// steps. The input's pixels are all kept.
+// steps. The input's pixels are all kept. With `structure`, no pixel on one of its planes is
+// entered: a body is completed from its head or legs over the whole depth-connected surface
+// while the floor it stands on, depth-connected through the feet, stays out (structure_planes.h).
 cv::Mat CompleteMaskByDepth(const cv::Mat& mask, const cv::Mat& depth,
-                            const MaskCompletionOptions& options);
+                            const MaskCompletionOptions& options,
+                            const StructurePlanes* structure = nullptr);
 
 }  // namespace moslam::feature

@@ -21,6 +21,7 @@
 #include "moslam/feature/frame.h"
 #include "moslam/feature/movable_mask.h"
 #include "moslam/feature/orb_extractor.h"
+#include "moslam/feature/structure_planes.h"
 #include "moslam/map/map.h"
 #include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/local_mapper.h"
@@ -341,7 +342,13 @@ class System::Impl : public KeyFrameSink {
         cv::countNonZero(mask) > 0) {
       feature::MaskCompletionOptions completion;
       completion.max_grow_px = options_.mask_completion_px;
-      mask = feature::CompleteMaskByDepth(mask, input.depth, completion);
+      std::optional<feature::StructurePlanes> structure;
+      if (options_.completion_structure) {
+        structure = feature::StructurePlanes::Find(input.depth, camera_, mask,
+                                                   feature::StructurePlaneOptions{});
+      }
+      mask = feature::CompleteMaskByDepth(mask, input.depth, completion,
+                                          structure ? &*structure : nullptr);
     }
     return mask;
   }

@@ -85,8 +85,13 @@ struct SystemOptions {
   // so a frame the network missed, or did not run on, still has one; 0 frames: off;
   int mask_propagation_frames = 3;
   // RGB-D: masks grown over the depth-connected surface they cover, up to this many pixels
-  // (feature::CompleteMaskByDepth); 0: off.
-  int mask_completion_px = 12;
+  // (feature::CompleteMaskByDepth), so a body the network saw only in part (its head, its legs)
+  // is masked whole; 0: off ...
+  int mask_completion_px = 400;
+  // ... never onto the large planes of the frame's depth (floor, walls: feature::StructurePlanes),
+  // which the feet touch; without this, growth is bounded by mask_completion_px alone (moslam run
+  // --no-completion-planes; ablations).
+  bool completion_structure = true;
   // Geometry for what no network knows (issue 24): each map point's static probability from its
   // residuals across frames weights pose optimization, and points judged moving are erased
   // (slam/static_scores.h; moslam run --no-static-scores) ...
