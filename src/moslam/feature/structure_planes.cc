@@ -17,6 +17,7 @@ void StructurePlaneOptions::Check() const {
   if (grid_px < 1) throw InputError("StructurePlaneOptions.grid_px must be >= 1");
   if (max_planes < 0) throw InputError("StructurePlaneOptions.max_planes must be >= 0");
   if (iterations < 1) throw InputError("StructurePlaneOptions.iterations must be >= 1");
+  if (score_stride < 1) throw InputError("StructurePlaneOptions.score_stride must be >= 1");
   if (!(inlier_abs >= 0.0) || !(inlier_rel >= 0.0) || !(inlier_abs + inlier_rel > 0.0)) {
     throw InputError("StructurePlaneOptions.inlier_abs and inlier_rel must be >= 0, not both 0");
   }
@@ -37,12 +38,24 @@ double Distance(const Eigen::Vector4d& plane, const Eigen::Vector3d& p) {
   return std::abs(plane.head<3>().dot(p) + plane[3]);
 }
 
-// The plane through the most of `open` (indices into samples), or a zero vector.
+int Support(const Eigen::Vector4d& plane, const std::vector<Sample>& samples,
+            const std::vector<int>& open, size_t stride, const StructurePlaneOptions& o) {
+  int count = 0;
+  for (size_t k = 0; k < open.size(); k += stride) {
+    const Eigen::Vector3d& p = samples[open[k]].p;
+    if (Distance(plane, p) < o.inlier_abs + o.inlier_rel * p.z()) ++count;
+  }
+  return count;
+}
+
+// The plane through the most of `open` (indices into samples), or a zero vector. Hypotheses are
+// scored on every score_stride-th sample only (a regular subset of the grid: the ranking of large
+// planes does not change, the cost falls by the stride), the winner's support on all of them.
 Eigen::Vector4d BestPlane(const std::vector<Sample>& samples, const std::vector<int>& open,
                           const StructurePlaneOptions& o, std::mt19937* rng, int* support) {
   std::uniform_int_distribution<size_t> pick(0, open.size() - 1);
   Eigen::Vector4d best = Eigen::Vector4d::Zero();
-  *support = 0;
+  int best_score = 0;
   for (int it = 0; it < o.iterations; ++it) {
     const Eigen::Vector3d& a = samples[open[pick(*rng)]].p;
     const Eigen::Vector3d& b = samples[open[pick(*rng)]].p;
@@ -51,16 +64,13 @@ Eigen::Vector4d BestPlane(const std::vector<Sample>& samples, const std::vector<
     if (n.norm() < 1e-9) continue;
     n.normalize();
     const Eigen::Vector4d plane(n.x(), n.y(), n.z(), -n.dot(a));
-    int count = 0;
-    for (int i : open) {
-      const Eigen::Vector3d& p = samples[i].p;
-      if (Distance(plane, p) < o.inlier_abs + o.inlier_rel * p.z()) ++count;
-    }
-    if (count > *support) {
-      *support = count;
+    const int score = Support(plane, samples, open, o.score_stride, o);
+    if (score > best_score) {
+      best_score = score;
       best = plane;
     }
   }
+  *support = best_score > 0 ? Support(best, samples, open, 1, o) : 0;
   return best;
 }
 
