@@ -34,17 +34,16 @@ struct Sample {
   cv::Point cell;
 };
 
-double Distance(const Eigen::Vector4d& plane, const Eigen::Vector3d& p) {
-  return std::abs(plane.head<3>().dot(p) + plane[3]);
+// Whether p lies on the plane within the inlier distance, which grows with depth as its noise.
+bool OnPlane(const Eigen::Vector4d& plane, const Eigen::Vector3d& p,
+             const StructurePlaneOptions& o) {
+  return std::abs(plane.head<3>().dot(p) + plane[3]) < o.inlier_abs + o.inlier_rel * p.z();
 }
 
 int Support(const Eigen::Vector4d& plane, const std::vector<Sample>& samples,
             const std::vector<int>& open, size_t stride, const StructurePlaneOptions& o) {
   int count = 0;
-  for (size_t k = 0; k < open.size(); k += stride) {
-    const Eigen::Vector3d& p = samples[open[k]].p;
-    if (Distance(plane, p) < o.inlier_abs + o.inlier_rel * p.z()) ++count;
-  }
+  for (size_t k = 0; k < open.size(); k += stride) count += OnPlane(plane, samples[open[k]].p, o);
   return count;
 }
 
@@ -98,9 +97,7 @@ StructurePlanes StructurePlanes::Find(const cv::Mat& depth, const camera::Pinhol
   options.Check();
   MOSLAM_CHECK(depth.type() == CV_32FC1);
   MOSLAM_CHECK(exclude.empty() || (exclude.type() == CV_8UC1 && exclude.size() == depth.size()));
-  StructurePlanes out;
-  out.options_ = options;
-  out.fx_ = camera.fx(), out.fy_ = camera.fy(), out.cx_ = camera.cx(), out.cy_ = camera.cy();
+  StructurePlanes out(camera, options);
   const int g = options.grid_px, gw = depth.cols / g, gh = depth.rows / g;
   std::vector<Sample> samples;
   for (int j = 0; j < gh; ++j) {
@@ -109,9 +106,7 @@ StructurePlanes StructurePlanes::Find(const cv::Mat& depth, const camera::Pinhol
       const float z = depth.at<float>(v, u);
       if (!(z > 0.0f) || !std::isfinite(z)) continue;
       if (!exclude.empty() && exclude.at<uint8_t>(v, u) != 0) continue;
-      samples.push_back(
-          {Eigen::Vector3d((u - out.cx_) / out.fx_ * z, (v - out.cy_) / out.fy_ * z, z),
-           cv::Point(i, j)});
+      samples.push_back({out.Point(u, v, z), cv::Point(i, j)});
     }
   }
   const double min_count = options.min_share * static_cast<double>(samples.size());
@@ -130,10 +125,7 @@ StructurePlanes StructurePlanes::Find(const cv::Mat& depth, const camera::Pinhol
     // that a slab through the room happens to cut.
     cv::Mat inliers = cv::Mat::zeros(gh, gw, CV_8UC1);
     for (int i : open) {
-      const Eigen::Vector3d& p = samples[i].p;
-      if (Distance(plane, p) < options.inlier_abs + options.inlier_rel * p.z()) {
-        inliers.at<uint8_t>(samples[i].cell) = 255;
-      }
+      if (OnPlane(plane, samples[i].p, options)) inliers.at<uint8_t>(samples[i].cell) = 255;
     }
     cv::Mat labels, stats, centroids;
     const int n = cv::connectedComponentsWithStats(inliers, labels, stats, centroids, 4);
@@ -159,15 +151,18 @@ StructurePlanes StructurePlanes::Find(const cv::Mat& depth, const camera::Pinhol
   return out;
 }
 
+Eigen::Vector3d StructurePlanes::Point(int u, int v, float z) const {
+  return static_cast<double>(z) * camera_.UnprojectPinhole(Eigen::Vector2d(u, v));
+}
+
 bool StructurePlanes::Contains(int u, int v, float z) const {
   if (planes_.empty() || !(z > 0.0f) || !std::isfinite(z)) return false;
   const int g = options_.grid_px;
-  const Eigen::Vector3d p((u - cx_) / fx_ * z, (v - cy_) / fy_ * z, z);
-  const double tolerance = options_.inlier_abs + options_.inlier_rel * z;
+  const Eigen::Vector3d p = Point(u, v, z);
   for (const Plane& plane : planes_) {
     const int i = std::min(u / g, plane.cells.cols - 1), j = std::min(v / g, plane.cells.rows - 1);
     if (i < 0 || j < 0 || plane.cells.at<uint8_t>(j, i) == 0) continue;
-    if (Distance(plane.coefficients, p) < tolerance) return true;
+    if (OnPlane(plane.coefficients, p, options_)) return true;
   }
   return false;
 }

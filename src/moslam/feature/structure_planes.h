@@ -65,13 +65,18 @@ class StructurePlanes {
   const Eigen::Vector4d& plane(int i) const { return planes_[i].coefficients; }
 
  private:
+  StructurePlanes(const camera::PinholeCamera& camera, const StructurePlaneOptions& options)
+      : camera_(camera), options_(options) {}
+  // The camera-frame point of pixel (u, v) at depth z (ideal pinhole).
+  Eigen::Vector3d Point(int u, int v, float z) const;
+
   struct Plane {
     Eigen::Vector4d coefficients;
     cv::Mat cells;  // CV_8UC1 grid, 255 where the part (dilated by one cell) lies
   };
-  std::vector<Plane> planes_;
+  camera::PinholeCamera camera_;
   StructurePlaneOptions options_;
-  double fx_ = 1, fy_ = 1, cx_ = 0, cy_ = 0;
+  std::vector<Plane> planes_;
 };
 
 }  // namespace moslam::feature

@@ -43,8 +43,7 @@ TEST(StructurePlanes, FindsFloorAndWallButNotTheBody) {
   const Room room = RenderRoom();
   const auto planes =
       StructurePlanes::Find(room.depth, test::TestCamera(), cv::Mat(), StructurePlaneOptions{});
-  ASSERT_EQ(planes.size(), 2) << planes.plane(0).transpose() << " / " << planes.plane(1).transpose()
-                              << " / " << planes.plane(planes.size() - 1).transpose();
+  ASSERT_EQ(planes.size(), 2);
   // One plane is the floor (normal along y), one the wall (normal along z).
   int floor = 0, wall = 0;
   for (int i = 0; i < planes.size(); ++i) {
