@@ -49,6 +49,7 @@ struct RunArgs {
   bool quiet = false;
   bool no_loop_closing = false;
   bool no_loop_verification = false;
+  bool no_loop_word_weights = false;
   bool no_short_loss_recovery = false;
   int mapping_nice = 10;
   // Movable objects beyond the per-frame mask (slam::SystemOptions).
@@ -114,6 +115,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.vocabulary_path = ResolveVocabulary(args.vocabulary);
   options.loop_closing = !args.no_loop_closing;
   options.loop_verification = !args.no_loop_verification;
+  options.loop_recent_word_weights = !args.no_loop_word_weights;
   options.short_loss_recovery = !args.no_short_loss_recovery;
   options.background_nice = args.mapping_nice;
   options.movable_evidence = !args.no_movable_evidence;
@@ -313,6 +315,10 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--no-loop-verification", args->no_loop_verification,
                     "Close every loop that ORB-SLAM2's tests accept, without checking it against "
                     "the drift the odometry allows, depths, neighbours and spread (comparisons)");
+  command->add_flag("--no-loop-word-weights", args->no_loop_word_weights,
+                    "Score loop candidates with ORB-SLAM2's bag-of-words weights, without "
+                    "down-weighting the words of places passed a short while ago (repeated "
+                    "structure; comparisons)");
   command->add_flag("--no-short-loss-recovery", args->no_short_loss_recovery,
                     "Relocalize a frame lost a moment ago wherever it matches, as ORB-SLAM2, "
                     "instead of near where the last velocity puts it (comparisons)");

@@ -1,6 +1,7 @@
 #include "moslam/slam/keyframe_database.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <utility>
 
@@ -10,6 +11,35 @@ namespace moslam::slam {
 
 int DirectIndexLevel(const vocab::Vocabulary& vocabulary) {
   return vocabulary.levels() >= 3 ? 1 : 0;
+}
+
+RecentWordWeights::RecentWordWeights(std::unordered_map<vocab::WordId, int> counts, int keyframes)
+    : counts_(std::move(counts)), keyframes_(keyframes) {
+  MOSLAM_CHECK(keyframes_ >= 0);
+}
+
+double RecentWordWeights::Factor(vocab::WordId word) const {
+  if (keyframes_ == 0) return 1.0;
+  const auto it = counts_.find(word);
+  const int c = it == counts_.end() ? 0 : std::min(it->second, keyframes_);
+  const double m1 = static_cast<double>(keyframes_) + 1.0;
+  return std::log(m1 / (static_cast<double>(c) + 1.0)) / std::log(m1);
+}
+
+vocab::BowVector RecentWordWeights::Apply(const vocab::BowVector& bow) const {
+  if (keyframes_ == 0) return bow;
+  vocab::BowVector out;
+  double sum = 0.0;
+  for (const auto& [word, value] : bow) {
+    const double v = value * Factor(word);
+    if (v == 0.0) continue;
+    out.emplace_hint(out.end(), word, v);
+    sum += std::abs(v);
+  }
+  if (sum > 0.0) {
+    for (auto& entry : out) entry.second /= sum;
+  }
+  return out;
 }
 
 KeyFrameDatabase::KeyFrameDatabase(std::shared_ptr<const vocab::Vocabulary> vocabulary)
@@ -53,7 +83,7 @@ void KeyFrameDatabase::Clear() {
 
 template <typename Exclude>
 std::unordered_map<uint64_t, KeyFrameDatabase::Scored> KeyFrameDatabase::ScoreSharing(
-    const vocab::BowVector& bow, Exclude exclude) const {
+    const vocab::BowVector& bow, Exclude exclude, const RecentWordWeights& weights) const {
   std::vector<std::pair<std::shared_ptr<map::KeyFrame>, int>> sharing;
   int max_common = 0;
   for (const auto& [id, common] : index_.SharingWords(bow)) {
@@ -67,9 +97,12 @@ std::unordered_map<uint64_t, KeyFrameDatabase::Scored> KeyFrameDatabase::ScoreSh
   // ORB-SLAM2: int minCommonWords = maxCommonWords * 0.8f, then strictly more than that.
   const int min_common = static_cast<int>(static_cast<float>(max_common) * 0.8f);
   std::unordered_map<uint64_t, Scored> scored;
+  const vocab::BowVector weighted = weights.Apply(bow);
   for (auto& [kf, common] : sharing) {
     if (common <= min_common) continue;
-    const double score = vocab::Vocabulary::Score(bow, kf->bow);
+    const double score = weights.keyframes() == 0
+                             ? vocab::Vocabulary::Score(bow, kf->bow)
+                             : vocab::Vocabulary::Score(weighted, weights.Apply(kf->bow));
     scored[kf->id] = Scored{kf, score};
   }
   return scored;
@@ -120,26 +153,49 @@ std::vector<std::shared_ptr<map::KeyFrame>> KeyFrameDatabase::Accumulate(
 std::vector<std::shared_ptr<map::KeyFrame>> KeyFrameDatabase::DetectRelocalizationCandidates(
     const vocab::BowVector& frame_bow) const {
   if (frame_bow.empty()) return {};
-  return Accumulate(ScoreSharing(frame_bow, [](const map::KeyFrame&) { return false; }), 0.0);
+  return Accumulate(ScoreSharing(
+                        frame_bow, [](const map::KeyFrame&) { return false; }, RecentWordWeights()),
+                    0.0);
 }
 
 std::vector<std::shared_ptr<map::KeyFrame>> KeyFrameDatabase::DetectLoopCandidates(
-    const map::KeyFrame& keyframe, double min_score) const {
+    const map::KeyFrame& keyframe, double min_score, const RecentWordWeights& weights) const {
   if (keyframe.bow.empty()) return {};
   const auto& connected = keyframe.connection_weights();
   const auto exclude = [&](const map::KeyFrame& kf) {
     return kf.id == keyframe.id || connected.count(kf.id) > 0;
   };
-  return Accumulate(ScoreSharing(keyframe.bow, exclude), min_score);
+  return Accumulate(ScoreSharing(keyframe.bow, exclude, weights), min_score);
 }
 
-double KeyFrameDatabase::MinCovisibleScore(const map::KeyFrame& keyframe) const {
+double KeyFrameDatabase::MinCovisibleScore(const map::KeyFrame& keyframe,
+                                           const RecentWordWeights& weights) const {
   double min_score = 1.0;
+  const vocab::BowVector weighted = weights.Apply(keyframe.bow);
   for (const auto& kf : keyframe.BestCovisibles(-1)) {
     if (kf->bow.empty()) continue;
-    min_score = std::min(min_score, vocab::Vocabulary::Score(keyframe.bow, kf->bow));
+    min_score = std::min(min_score, vocab::Vocabulary::Score(weighted, weights.Apply(kf->bow)));
   }
   return min_score;
+}
+
+RecentWordWeights KeyFrameDatabase::RecentPastWeights(const map::KeyFrame& keyframe,
+                                                      int num_keyframes, int min_keyframes) const {
+  MOSLAM_CHECK(num_keyframes >= 0 && min_keyframes >= 0);
+  const auto& connected = keyframe.connection_weights();
+  std::unordered_map<vocab::WordId, int> counts;
+  int found = 0;
+  for (auto it = keyframes_.lower_bound(keyframe.id);
+       it != keyframes_.begin() && found < num_keyframes;) {
+    --it;
+    if (connected.count(it->first) > 0) continue;
+    const auto kf = it->second.lock();
+    if (!kf || kf->bad()) continue;
+    for (const auto& entry : kf->bow) ++counts[entry.first];
+    ++found;
+  }
+  if (found == 0 || found < min_keyframes) return RecentWordWeights();
+  return RecentWordWeights(std::move(counts), found);
 }
 
 }  // namespace moslam::slam

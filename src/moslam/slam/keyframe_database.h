@@ -18,6 +18,7 @@
 //   auto loops = db.DetectLoopCandidates(*kf, db.MinCovisibleScore(*kf));
 #pragma once
 
+#include <map>
 #include <memory>
 #include <unordered_map>
 #include <vector>
@@ -38,6 +39,29 @@ namespace moslam::slam {
 // levels (the shipped 5-level one included, where levelsup = 4 would leave 10 groups;
 // docs/VOCABULARY.md), and level 0 for shallower test trees.
 int DirectIndexLevel(const vocab::Vocabulary& vocabulary);
+
+// Down-weighting of repeated structure in loop queries. A word that the places passed a short
+// while ago also hold (a street of identical houses, a corridor of identical doors) says little
+// about *which* place the camera is at: the same idea as the inverse document frequency of the
+// vocabulary (Sivic & Zisserman 2003), but over the recent trajectory rather than the training
+// images, like the burstiness weighting of Jegou et al. (CVPR 2009) across images. Each word's
+// weight is multiplied by log((m + 1) / (c + 1)) / log(m + 1), where c of the m recent
+// keyframes hold it (1 for a word none of them holds, 0 for one all of them hold), and the
+// vector is L1-normalized again. Default-constructed: the identity (m = 0).
+class RecentWordWeights {
+ public:
+  RecentWordWeights() = default;
+  // `counts`: word -> number of the `keyframes` recent keyframes whose BoW holds it.
+  RecentWordWeights(std::unordered_map<vocab::WordId, int> counts, int keyframes);
+  int keyframes() const { return keyframes_; }
+  double Factor(vocab::WordId word) const;  // in [0, 1]
+  // `bow` with every word's weight times its factor, L1-normalized (empty when nothing is left).
+  vocab::BowVector Apply(const vocab::BowVector& bow) const;
+
+ private:
+  std::unordered_map<vocab::WordId, int> counts_;
+  int keyframes_ = 0;
+};
 
 struct KeyFrameBow {
   vocab::BowVector bow;
@@ -77,12 +101,22 @@ class KeyFrameDatabase {
   // ORB-SLAM2's DetectLoopCandidates: as above for a keyframe's BoW, among keyframes that are
   // not `keyframe` itself nor connected to it in the covisibility graph, keeping only scores
   // >= `min_score` before accumulating (ORB-SLAM2's minScore: MinCovisibleScore(keyframe)).
-  std::vector<std::shared_ptr<map::KeyFrame>> DetectLoopCandidates(const map::KeyFrame& keyframe,
-                                                                   double min_score) const;
+  // Scores are taken on both vectors reweighted by `weights` (identity by default).
+  std::vector<std::shared_ptr<map::KeyFrame>> DetectLoopCandidates(
+      const map::KeyFrame& keyframe, double min_score,
+      const RecentWordWeights& weights = RecentWordWeights()) const;
 
   // The lowest BoW score between `keyframe` and its connected keyframes (ORB-SLAM2's
   // LoopClosing::DetectLoop minScore); 1 when it has none. Keyframes without BoW are skipped.
-  double MinCovisibleScore(const map::KeyFrame& keyframe) const;
+  double MinCovisibleScore(const map::KeyFrame& keyframe,
+                           const RecentWordWeights& weights = RecentWordWeights()) const;
+
+  // The word weights of the recent past of `keyframe`: its `num_keyframes` indexed predecessors
+  // (highest ids below its own) that are not connected to it in the covisibility graph, i.e.
+  // places passed a while ago and out of view now. Fewer than `min_keyframes` of them (the start
+  // of a run): the identity, as counts over a handful of keyframes say nothing.
+  RecentWordWeights RecentPastWeights(const map::KeyFrame& keyframe, int num_keyframes,
+                                      int min_keyframes) const;
 
  private:
   struct Scored {
@@ -92,8 +126,8 @@ class KeyFrameDatabase {
   // Shared-word counts, min-common-words filter and scores: the first steps of both queries.
   // `exclude(kf)` drops keyframes before counting.
   template <typename Exclude>
-  std::unordered_map<uint64_t, Scored> ScoreSharing(const vocab::BowVector& bow,
-                                                    Exclude exclude) const;
+  std::unordered_map<uint64_t, Scored> ScoreSharing(const vocab::BowVector& bow, Exclude exclude,
+                                                    const RecentWordWeights& weights) const;
   // Covisibility accumulation and the 0.75 x best filter.
   static std::vector<std::shared_ptr<map::KeyFrame>> Accumulate(
       const std::unordered_map<uint64_t, Scored>& scored, double min_score);
@@ -101,7 +135,7 @@ class KeyFrameDatabase {
   std::shared_ptr<const vocab::Vocabulary> vocabulary_;
   int direct_index_level_ = 0;
   vocab::Database index_;
-  std::unordered_map<uint64_t, std::weak_ptr<map::KeyFrame>> keyframes_;
+  std::map<uint64_t, std::weak_ptr<map::KeyFrame>> keyframes_;  // by id: recent ones last
 };
 
 }  // namespace moslam::slam

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <numeric>
 
 #include "moslam/slam/test_scene.h"
@@ -104,6 +105,72 @@ TEST(KeyFrameDatabase, LoopCandidatesExcludeConnectedAndApplyMinScore) {
   // ORB-SLAM2's min score: the lowest score of k with its covisibles (a2: 0.70).
   EXPECT_NEAR(fx.db.MinCovisibleScore(*k), 0.70, 1e-9);
   EXPECT_DOUBLE_EQ(fx.db.MinCovisibleScore(*fx.c), 1.0);  // no covisibles
+}
+
+TEST(RecentWordWeights, LocalInverseDocumentFrequency) {
+  const RecentWordWeights identity;
+  EXPECT_EQ(identity.keyframes(), 0);
+  EXPECT_DOUBLE_EQ(identity.Factor(3), 1.0);
+  const vocab::BowVector bow = {{1, 0.25}, {2, 0.25}, {3, 0.5}};
+  EXPECT_EQ(identity.Apply(bow), bow);
+  // 4 recent keyframes: word 1 in all of them, word 2 in one, word 3 in none.
+  const RecentWordWeights w({{1, 4}, {2, 1}}, 4);
+  EXPECT_DOUBLE_EQ(w.Factor(1), 0.0);
+  EXPECT_NEAR(w.Factor(2), std::log(2.5) / std::log(5.0), 1e-12);
+  EXPECT_DOUBLE_EQ(w.Factor(3), 1.0);
+  const vocab::BowVector out = w.Apply(bow);
+  ASSERT_EQ(out.size(), 2u);  // word 1 has weight 0: gone
+  const double v2 = 0.25 * w.Factor(2);
+  EXPECT_NEAR(out.at(2), v2 / (v2 + 0.5), 1e-12);
+  EXPECT_NEAR(out.at(3), 0.5 / (v2 + 0.5), 1e-12);
+  EXPECT_TRUE(w.Apply(vocab::BowVector{{1, 1.0}}).empty());
+}
+
+// A street of identical houses: the alias shares more words with the new keyframe than the true
+// place does, but those words are the ones every recently passed place holds as well.
+TEST(KeyFrameDatabase, RecentlyRepeatedWordsDoNotMakeALoop) {
+  map::Map map;
+  KeyFrameDatabase db(TinyVocabulary());
+  const testing::Scene scene = RandomScene(10, 1);
+  const auto add = [&](std::vector<vocab::WordId> words) {
+    auto kf = ObserveScene(&map, scene, CameraAt(0.1 * map.next_keyframe_id()));
+    for (const vocab::WordId w : words) kf->bow[w] = 1.0 / static_cast<double>(words.size());
+    db.Add(kf);
+    return kf;
+  };
+  const auto range = [](vocab::WordId from, vocab::WordId to, std::vector<vocab::WordId> v) {
+    for (vocab::WordId w = from; w < to; ++w) v.push_back(w);
+    return v;
+  };
+  add(range(900, 920, {}));                                   // the first keyframe: nothing shared
+  const auto alias = add(range(100, 107, range(0, 13, {})));  // words 0..12 of the query
+  const auto place = add(range(200, 209, range(9, 20, {})));  // words 9..19
+  std::vector<std::shared_ptr<map::KeyFrame>> recent;
+  for (int i = 0; i < 6; ++i) {  // houses passed since: words 0..8 (the facade) and their own
+    recent.push_back(add(range(300 + 20 * i, 311 + 20 * i, range(0, 9, {}))));
+  }
+  const auto k = add(range(0, 20, {}));
+
+  // ORB-SLAM2's scores: alias 0.65, place 0.55 (> 0.75 x 0.65): both, the alias first.
+  EXPECT_EQ(db.DetectLoopCandidates(*k, 0.0),
+            (std::vector<std::shared_ptr<map::KeyFrame>>{alias, place}));
+
+  // The six houses passed since hold words 0..8: weight 0, the place alone remains.
+  const RecentWordWeights w = db.RecentPastWeights(*k, 6, 5);
+  EXPECT_EQ(w.keyframes(), 6);
+  EXPECT_DOUBLE_EQ(w.Factor(0), 0.0);
+  EXPECT_DOUBLE_EQ(w.Factor(9), 1.0);
+  EXPECT_EQ(db.DetectLoopCandidates(*k, 0.0, w),
+            std::vector<std::shared_ptr<map::KeyFrame>>{place});
+
+  // Keyframes in view of k are not its past: connected to the last house, the six are the
+  // other five and the place (which holds none of words 0..8).
+  Connect(k, recent.back(), 30);
+  const RecentWordWeights w2 = db.RecentPastWeights(*k, 6, 5);
+  EXPECT_EQ(w2.keyframes(), 6);
+  EXPECT_NEAR(w2.Factor(0), std::log(7.0 / 6.0) / std::log(7.0), 1e-12);
+  // Too few predecessors for counts to mean anything: the identity.
+  EXPECT_EQ(db.RecentPastWeights(*k, 20, 10).keyframes(), 0);
 }
 
 TEST(KeyFrameDatabase, ErasedThroughTheMapListener) {

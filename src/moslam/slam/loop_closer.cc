@@ -25,6 +25,11 @@ void LoopCloserOptions::Check() const {
   if (min_point_matches < 3) throw InputError("LoopCloserOptions.min_point_matches must be >= 3");
   if (min_sim3_inliers < 3) throw InputError("LoopCloserOptions.min_sim3_inliers must be >= 3");
   if (min_loop_matches < 1) throw InputError("LoopCloserOptions.min_loop_matches must be >= 1");
+  if (recent_word_keyframes < 0 || min_recent_word_keyframes < 0) {
+    throw InputError(
+        "LoopCloserOptions.recent_word_keyframes and min_recent_word_keyframes must "
+        "be >= 0");
+  }
   if (num_threads < 1) throw InputError("LoopCloserOptions.num_threads must be >= 1");
   verification.Check();
 }
@@ -135,8 +140,13 @@ bool LoopCloser::DetectLoop(const KeyFramePtr& kf, std::vector<KeyFramePtr>* con
   std::set<uint64_t> excluded = {kf->id};
   for (const auto& n : kf->BestCovisibles(-1)) excluded.insert(n->id);
   std::vector<KeyFramePtr> found;
-  const double min_score = database_->MinCovisibleScore(*kf);
-  for (const auto& c : database_->DetectLoopCandidates(*kf, min_score)) {
+  const RecentWordWeights weights =
+      options_.recent_word_keyframes > 0
+          ? database_->RecentPastWeights(*kf, options_.recent_word_keyframes,
+                                         options_.min_recent_word_keyframes)
+          : RecentWordWeights();
+  const double min_score = database_->MinCovisibleScore(*kf, weights);
+  for (const auto& c : database_->DetectLoopCandidates(*kf, min_score, weights)) {
     if (c && !c->bad() && !excluded.count(c->id)) found.push_back(c);
   }
   if (found.empty()) {
@@ -174,7 +184,9 @@ bool LoopCloser::DetectLoop(const KeyFramePtr& kf, std::vector<KeyFramePtr>* con
   if (!consistent->empty() && spdlog::should_log(spdlog::level::debug)) {
     std::string scores;
     for (const auto& c : *consistent) {
-      scores += fmt::format(" kf {} ({:.3f})", c->id, vocab::Vocabulary::Score(kf->bow, c->bow));
+      scores +=
+          fmt::format(" kf {} ({:.3f})", c->id,
+                      vocab::Vocabulary::Score(weights.Apply(kf->bow), weights.Apply(c->bow)));
     }
     spdlog::debug("loop candidates of kf {} (min covisible score {:.3f}), consistent:{}", kf->id,
                   min_score, scores);

@@ -1,8 +1,10 @@
 // Loop closing (ORB-SLAM2's LoopClosing, Mur-Artal & Tardós 2017, Sec. V; ORB-SLAM, Mur-Artal et
 // al. 2015, Sec. VI), one keyframe at a time after local mapping:
 //  1. detection: bag-of-words candidates scoring at least the current keyframe's worst covisible
-//     neighbour (KeyFrameDatabase::DetectLoopCandidates), kept only when a candidate's
-//     covisibility group was consistent with those of the previous 3 keyframes;
+//     neighbour (KeyFrameDatabase::DetectLoopCandidates), scores taken with the words that
+//     recently passed places also hold down-weighted (RecentWordWeights: repeated structure),
+//     kept only when a candidate's covisibility group was consistent with those of the previous
+//     3 keyframes;
 //  2. Sim(3) with each candidate: bag-of-words matches of their map points (SearchByBoW), RANSAC
 //     (slam/sim3_solver.h), guided matching (SearchBySim3), refinement (optim::OptimizeSim3),
 //     accepted with >= 20 inliers, then the points of the candidate's covisible keyframes
@@ -48,6 +50,12 @@ struct LoopCloserOptions {
   int min_point_matches = 20;            // descriptor matches to try a candidate (ORB-SLAM2: 20)
   int min_sim3_inliers = 20;             // after RANSAC and after refinement (ORB-SLAM2: 20)
   int min_loop_matches = 40;             // after projecting the loop side (ORB-SLAM2: 40)
+  // Repeated structure (slam/keyframe_database.h, RecentWordWeights): the BoW scores of the
+  // detection down-weight the words held by the last `recent_word_keyframes` keyframes that
+  // are out of view of the current one (0: off, ORB-SLAM2's scores), once at least
+  // `min_recent_word_keyframes` of them exist.
+  int recent_word_keyframes = 20;
+  int min_recent_word_keyframes = 5;
   // Checks of a found loop against the map before it is corrected (slam/loop_verification.h);
   // verify = false closes every loop that passed ORB-SLAM2's tests (moslam run
   // --no-loop-verification, for comparisons).

@@ -167,6 +167,7 @@ class System::Impl : public KeyFrameSink {
     l.fix_scale = !Mono(o);  // stereo/RGB-D maps have metric scale; monocular ones drift in scale
     l.global_bundle_adjustment = o.loop_global_bundle_adjustment;
     l.verify = o.loop_verification;
+    if (!o.loop_recent_word_weights) l.recent_word_keyframes = 0;
     // Monocular maps drift in scale as well as in pose: a correction may be a larger share of
     // the path travelled (KITTI 07's monocular run drifts a few per cent, more at turns).
     if (Mono(o)) l.verification.max_drift_ratio = 0.5;

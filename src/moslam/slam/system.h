@@ -63,6 +63,10 @@ struct SystemOptions {
   // bound, depths, neighbours, spread); off closes every loop ORB-SLAM2's tests accept (moslam
   // run --no-loop-verification).
   bool loop_verification = true;
+  // Loop detection down-weights the words of recently passed places (repeated structure;
+  // LoopCloserOptions::recent_word_keyframes); off: ORB-SLAM2's BoW scores (moslam run
+  // --no-loop-word-weights).
+  bool loop_recent_word_weights = true;
   // Short-loss recovery (TrackerOptions::recovery_window, slam/tracker_recovery.cc): for 2 s
   // after the last tracked frame a lost frame is searched at the constant-velocity prediction and
   // a relocalization must land near it. Off: ORB-SLAM2's relocalization, which takes any place
