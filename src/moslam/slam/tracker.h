@@ -159,6 +159,9 @@ class Tracker {
   void RefreshLastFrame();
   int TrackWithMotionModel();
   int TrackReferenceKeyFrame();
+  // After a motion model that kept few inliers: the reference keyframe tried too, the better
+  // of the two kept; returns its inliers.
+  int CrossCheckWithReference(int motion_inliers);
   bool Relocalize(TrackOutcome* out);
   // Short-loss recovery (tracker_recovery.cc): the predicted pose while recently lost, the
   // prior it gives relocalization.
