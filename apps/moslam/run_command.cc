@@ -60,6 +60,7 @@ struct RunArgs {
   bool no_moving_regions = false;
   bool no_completion_planes = false;
   bool no_pose_consensus = false;
+  bool no_motion_cross_check = false;
   int mask_margin = slam::SystemOptions{}.mask_margin_px;
   int mask_propagation = slam::SystemOptions{}.mask_propagation_frames;
   int mask_completion = slam::SystemOptions{}.mask_completion_px;
@@ -125,6 +126,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.moving_regions = !args.no_moving_regions;
   options.completion_structure = !args.no_completion_planes;
   options.pose_consensus = !args.no_pose_consensus;
+  options.motion_cross_check = !args.no_motion_cross_check;
   options.mask_margin_px = args.mask_margin;
   options.mask_propagation_frames = args.mask_propagation;
   options.mask_completion_px = args.mask_completion;
@@ -341,6 +343,9 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--no-moving-regions", args->no_moving_regions,
                     "Do not turn clusters of keypoints found moving into mask regions carried "
                     "into the next frames (ablations)");
+  command->add_flag("--no-motion-cross-check", args->no_motion_cross_check,
+                    "Take the motion model's pose however few of the last frame's inliers it "
+                    "keeps, without trying the reference keyframe too (ablations)");
   command->add_flag("--no-pose-consensus", args->no_pose_consensus,
                     "Stereo/RGB-D: optimize each frame's pose from all its matches by least "
                     "squares alone, without first finding by counting which of them agree "

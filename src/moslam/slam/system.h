@@ -108,6 +108,9 @@ struct SystemOptions {
   // optimized (optim/pose_consensus.h), so a close moving object cannot take the camera along
   // (moslam run --no-pose-consensus).
   bool pose_consensus = true;
+  // A motion model that keeps few of the last frame's inliers is cross-checked with the
+  // reference keyframe (TrackerOptions::motion_cross_check; moslam run --no-motion-cross-check).
+  bool motion_cross_check = true;
   void Check() const;  // InputError naming the field
 };
 

@@ -114,7 +114,8 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
     if (have_velocity_ && last_ok_) {
       out.num_matches = TrackWithMotionModel();
       ok = out.num_matches >= kMinTrackingMatches;
-      if (ok && out.num_matches < kSuspectMotionShare * last_inliers_) {
+      if (ok && options_.motion_cross_check &&
+          out.num_matches < kSuspectMotionShare * last_inliers_) {
         out.num_matches = CrossCheckWithReference(out.num_matches);
       }
     }

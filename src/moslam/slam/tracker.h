@@ -87,6 +87,10 @@ struct TrackerOptions {
   // information cannot take the camera along when it moves; the optimizer starts from them.
   bool pose_consensus = true;
   optim::PoseConsensusOptions consensus;
+  // A motion model that keeps under a quarter of the last frame's inliers is cross-checked with
+  // the reference keyframe's descriptor matches, the better pose kept (a prediction far off
+  // among repeated structure; Tracker::CrossCheckWithReference).
+  bool motion_cross_check = true;
   void Check() const;  // InputError naming the field
 };
 
