@@ -69,6 +69,16 @@ std::vector<StageColumn> StageColumns(const RunResult& r) {
 
 double Median(std::vector<double> values) { return Percentile(std::move(values), 50.0); }
 
+// Closed loops as [{"time": t, "loop_time": t0}, ...]: the current keyframe's timestamp and the
+// one it was closed with.
+nlohmann::json LoopsJson(const slam::MapSummary& map) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& [time, loop_time] : map.loop_times) {
+    out.push_back({{"time", time}, {"loop_time", loop_time}});
+  }
+  return out;
+}
+
 // Median milliseconds per frame of each part of the pipeline. Segmentation (with its CRF) runs in
 // its own thread, concurrently with tracking, so the sustained rate is bounded by the slower of
 // `segmentation_total` and `tracking_total`, not by their sum. Local mapping runs in its own
@@ -269,6 +279,7 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                          {"loops_closed", result.map.loops_closed},
                          {"loops_rejected", result.map.loops_rejected},
                          {"global_ba_merged", result.map.global_ba_merged},
+                         {"loops", LoopsJson(result.map)},
                          {"times_ms", times},
                          {"breakdown_median_ms", Breakdown(result)},
                          {"wall_s", result.wall_s},

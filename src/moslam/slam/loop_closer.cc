@@ -126,6 +126,7 @@ bool LoopCloser::ProcessKeyFrame(const KeyFramePtr& keyframe) {
     std::lock_guard<std::mutex> stats_lock(stats_mutex_);
     ++stats_.loops_closed;
     stats_.loops.emplace_back(keyframe->id, loop.loop->id);
+    stats_.loop_times.emplace_back(keyframe->frame.timestamp, loop.loop->frame.timestamp);
   }
   if (options_.global_bundle_adjustment) StartGlobalBundleAdjustment();
   return true;

@@ -76,6 +76,7 @@ struct LoopCloserStats {
   int global_ba_merged = 0;
   int global_ba_dropped = 0;                         // stale (another correction meanwhile)
   std::vector<std::pair<uint64_t, uint64_t>> loops;  // (current, loop) keyframe ids
+  std::vector<std::pair<double, double>> loop_times;  // their timestamps (s), as `loops`
 };
 
 class LoopCloser {

@@ -316,6 +316,7 @@ class System::Impl : public KeyFrameSink {
       summary.loops_closed = loops.loops_closed;
       summary.loops_rejected = loops.loops_rejected;
       summary.global_ba_merged = loops.global_ba_merged;
+      summary.loop_times = loops.loop_times;
     }
     summary.initialized_frame = initialized_frame_;
     summary.resets = tracker_.rejected_initializations();

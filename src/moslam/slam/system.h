@@ -165,6 +165,9 @@ struct MapSummary {
   int loops_closed = 0;            // loop corrections (LoopCloserStats)
   int loops_rejected = 0;          // loops found but refused by the verification
   int global_ba_merged = 0;        // full bundle adjustments after a loop, written back
+  // Per closed loop: the timestamps (s) of the current and the loop keyframe, so that a run's
+  // summary tells a true loop (a return to an earlier place) from a false one.
+  std::vector<std::pair<double, double>> loop_times;
   int mapping_steps = 0;           // keyframes processed by local mapping
   double mapping_ms_median = 0.0;  // per processed keyframe
   double mapping_ms_total = 0.0;
