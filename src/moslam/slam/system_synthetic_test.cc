@@ -94,7 +94,7 @@ TEST(SystemSynthetic, DegradedMasksStayWithinTwiceTheExactMasksError) {
 }
 
 // A street of identical houses (issue 32's aliasing ring, docs/SYNTH.md) at the end of a corner:
-// at frame 233 of seed 3 the yaw rate drops from 17 deg/s to 0 at once, the constant-velocity
+// at frame 233 of seed 3 the yaw rate drops from 16 deg/s to 0 at once, the constant-velocity
 // prediction is ~20 px off, and the motion model finds 122 of the last frame's 576 points, among
 // facades of identical windows. Taking its pose put the camera 1.7 m back, one window over, and
 // the next frames followed (4 m off by frame 236, 13 m by 240). With the cross-check against the

@@ -320,7 +320,7 @@ int Tracker::CrossCheckWithReference(int motion_inliers) {
   // A prediction far off (a turn that stops at once, a jolt) finds few of the last frame's
   // points in its radius, and among repeated structure (a facade of identical windows) the pose
   // then settles on an alias a window or two over, which the local map confirms and the next
-  // predictions repeat (street_repeat_loop seed 3, frame 233: the yaw rate drops from 17 deg/s
+  // predictions repeat (street_repeat_loop seed 3, frame 233: the yaw rate drops from 16 deg/s
   // to 0 at the end of a corner, the motion model keeps 33 of the last frame's 576 inliers and
   // puts the camera 1.7 m back). The reference keyframe's descriptor matches (ratio test, no
   // prediction) are tried as well, and the pose with more inliers is kept.
