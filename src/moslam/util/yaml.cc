@@ -44,12 +44,14 @@ bool IsNonDecimalNumber(std::string_view token) {
   return c == 'x' || c == 'X' || (c >= '0' && c <= '9');
 }
 
-// Throws InputError at the first unquoted hexadecimal or octal number, naming the line's key.
-void RejectNonDecimalNumbers(const std::string& path) {
+// Calls `visit(line, key, token)` for every unquoted, uncommented token of the file (split at
+// YAML's punctuation), with the key of the token's line ("" when the line has none).
+template <typename Visit>
+void ForEachPlainToken(const std::string& path, Visit visit) {
   for (const TextLine& line : ReadDataLines(path)) {
     const std::string& text = line.text;
     const size_t colon = text.find(':');
-    std::string key =
+    const std::string key =
         colon == std::string::npos ? std::string() : std::string(Trim(text.substr(0, colon)));
     size_t i = 0;
     while (i < text.size()) {
@@ -67,18 +69,41 @@ void RejectNonDecimalNumbers(const std::string& path) {
         ++i;
         continue;
       }
-      const std::string_view token(text.data() + i, stop - i);
-      if (IsNonDecimalNumber(token)) {
-        ThrowAtLine(
-            path, line.number,
-            fmt::format("{}'{}' is not a decimal number (hexadecimal and octal numbers are "
-                        "not accepted; write it in decimal)",
-                        key.empty() ? std::string() : fmt::format("key '{}': ", Excerpt(key)),
-                        Excerpt(token)));
-      }
+      visit(line, key, std::string_view(text.data() + i, stop - i));
       i = stop;
     }
   }
+}
+
+std::string KeyPrefix(const std::string& key) {
+  return key.empty() ? std::string() : fmt::format("key '{}': ", Excerpt(key));
+}
+
+// Throws InputError at the first unquoted hexadecimal or octal number, naming the line's key.
+void RejectNonDecimalNumbers(const std::string& path) {
+  ForEachPlainToken(path, [&](const TextLine& line, const std::string& key,
+                              std::string_view token) {
+    if (!IsNonDecimalNumber(token)) return;
+    ThrowAtLine(path, line.number,
+                fmt::format("{}'{}' is not a decimal number (hexadecimal and octal numbers are "
+                            "not accepted; write it in decimal)",
+                            KeyPrefix(key), Excerpt(token)));
+  });
+}
+
+// Throws InputError at the first YAML tag other than !!opencv-matrix. Options are numbers,
+// strings, lists and OpenCV matrices; a tag only changes how OpenCV reads a value, and OpenCV
+// 4.6 loops forever on some "!!binary" values (a base64 block whose header names no element
+// type, e.g. "AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA"), so this runs before OpenCV sees the file.
+void RejectTags(const std::string& path) {
+  ForEachPlainToken(path, [&](const TextLine& line, const std::string& key,
+                              std::string_view token) {
+    if (token[0] != '!' || token == "!!opencv-matrix") return;
+    ThrowAtLine(path, line.number,
+                fmt::format("{}the YAML tag '{}' is not supported (only !!opencv-matrix is; "
+                            "write the value as a number, a string or a list)",
+                            KeyPrefix(key), Excerpt(token)));
+  });
 }
 
 [[noreturn]] void WrongType(const std::string& path, const std::string& key, const char* expected) {
@@ -89,6 +114,7 @@ void RejectNonDecimalNumbers(const std::string& path) {
 
 YamlFile::YamlFile(const std::string& path) : path_(path), impl_(std::make_unique<Impl>()) {
   RequireFile(path, "YAML options file");
+  RejectTags(path);
   // OpenCV's parser reports some malformed input with other exceptions than cv::Exception
   // (std::length_error from a string it sizes from garbage): all of them are bad input here.
   try {

@@ -110,6 +110,29 @@ TEST(YamlFile, HexadecimalAndOctalNumbersAreRefusedNamingKeyAndLine) {
   EXPECT_EQ(f.Required<std::string>("e"), "017");
 }
 
+// Issue 31: OpenCV 4.6 loops forever on a "!!binary" block whose header names no element type;
+// tags are refused before OpenCV parses the file, naming the line. (Without the fix this test
+// hangs rather than fails, which ctest's timeout reports.)
+TEST(YamlFile, YamlTagsOtherThanOpenCvMatrixAreRefusedBeforeParsing) {
+  testing::TempDir dir;
+  const std::string hang = dir.Write(
+      "hang.yaml", "%YAML:1.0\na: 1\nx: !!binary |\n   AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(hang); }),
+              AllOf(HasSubstr(hang + ":3:"), HasSubstr("key 'x'"), HasSubstr("!!binary")));
+  const std::string str = dir.Write("str.yaml", "%YAML:1.0\nlist: [1, !!str 2]\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(str); }),
+              AllOf(HasSubstr(str + ":2:"), HasSubstr("!!str")));
+  // Matrices keep their tag; a '!' inside text or a comment is no tag.
+  const std::string fine = dir.Write("fine.yaml",
+                                     "%YAML:1.0\nm: !!opencv-matrix\n   rows: 1\n   cols: 1\n"
+                                     "   dt: d\n   data: [2.0]\nname: \"!!binary\"\n"
+                                     "b: hi!\n# !!binary in a comment\n");
+  YamlFile f(fine);
+  EXPECT_EQ(f.Required<std::vector<double>>("m"), std::vector<double>{2.0});
+  EXPECT_EQ(f.Required<std::string>("name"), "!!binary");
+  EXPECT_EQ(f.Required<std::string>("b"), "hi!");
+}
+
 TEST(YamlFile, AListAtTheTopOrADirectoryIsNamed) {
   testing::TempDir dir;
   const std::string list = dir.Write("list.yaml", "%YAML:1.0\n- a\n- b\n");
