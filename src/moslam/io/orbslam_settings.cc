@@ -186,4 +186,21 @@ OrbSlamSettings LoadOrbSlamSettings(const std::string& path, SensorType sensor) 
   return s;
 }
 
+void CompleteImageSize(OrbSlamSettings* settings, const std::string& settings_path, int width,
+                       int height, const std::string& frame_path) {
+  if (settings->camera.HasSize()) return;
+  camera::PinholeOptions sized = settings->camera;
+  sized.width = width;
+  sized.height = height;
+  try {
+    camera::CheckPinholeOptions(sized, "Camera.");
+  } catch (const InputError& e) {
+    ThrowInFile(settings_path,
+                fmt::format("{} (the settings give no Camera.width/Camera.height; the size {}x{} "
+                            "is the first frame's, {})",
+                            e.what(), width, height, Excerpt(frame_path, 200)));
+  }
+  settings->camera = sized;
+}
+
 }  // namespace moslam::io

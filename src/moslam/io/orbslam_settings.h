@@ -83,4 +83,12 @@ struct OrbSlamSettings {
 // Reads and checks `path` for `sensor`. All errors are InputErrors naming the file and the key.
 OrbSlamSettings LoadOrbSlamSettings(const std::string& path, SensorType sensor);
 
+// For settings without Camera.width/Camera.height: sets the image size from the first frame
+// (`size`, read from `frame_path`) and runs the checks that need it (principal point inside the
+// image, focal lengths against the image side, distortion invertible over the image), which
+// LoadOrbSlamSettings could not. Throws InputError naming `settings_path`, the key and the frame.
+// Does nothing when the settings give the size (the run checks every frame against it).
+void CompleteImageSize(OrbSlamSettings* settings, const std::string& settings_path, int width,
+                       int height, const std::string& frame_path);
+
 }  // namespace moslam::io

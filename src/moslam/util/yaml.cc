@@ -81,14 +81,14 @@ std::string KeyPrefix(const std::string& key) {
 
 // Throws InputError at the first unquoted hexadecimal or octal number, naming the line's key.
 void RejectNonDecimalNumbers(const std::string& path) {
-  ForEachPlainToken(path, [&](const TextLine& line, const std::string& key,
-                              std::string_view token) {
-    if (!IsNonDecimalNumber(token)) return;
-    ThrowAtLine(path, line.number,
-                fmt::format("{}'{}' is not a decimal number (hexadecimal and octal numbers are "
-                            "not accepted; write it in decimal)",
-                            KeyPrefix(key), Excerpt(token)));
-  });
+  ForEachPlainToken(
+      path, [&](const TextLine& line, const std::string& key, std::string_view token) {
+        if (!IsNonDecimalNumber(token)) return;
+        ThrowAtLine(path, line.number,
+                    fmt::format("{}'{}' is not a decimal number (hexadecimal and octal numbers are "
+                                "not accepted; write it in decimal)",
+                                KeyPrefix(key), Excerpt(token)));
+      });
 }
 
 // Throws InputError at the first YAML tag other than !!opencv-matrix. Options are numbers,
@@ -96,14 +96,14 @@ void RejectNonDecimalNumbers(const std::string& path) {
 // 4.6 loops forever on some "!!binary" values (a base64 block whose header names no element
 // type, e.g. "AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA"), so this runs before OpenCV sees the file.
 void RejectTags(const std::string& path) {
-  ForEachPlainToken(path, [&](const TextLine& line, const std::string& key,
-                              std::string_view token) {
-    if (token[0] != '!' || token == "!!opencv-matrix") return;
-    ThrowAtLine(path, line.number,
-                fmt::format("{}the YAML tag '{}' is not supported (only !!opencv-matrix is; "
-                            "write the value as a number, a string or a list)",
-                            KeyPrefix(key), Excerpt(token)));
-  });
+  ForEachPlainToken(
+      path, [&](const TextLine& line, const std::string& key, std::string_view token) {
+        if (token[0] != '!' || token == "!!opencv-matrix") return;
+        ThrowAtLine(path, line.number,
+                    fmt::format("{}the YAML tag '{}' is not supported (only !!opencv-matrix is; "
+                                "write the value as a number, a string or a list)",
+                                KeyPrefix(key), Excerpt(token)));
+      });
 }
 
 [[noreturn]] void WrongType(const std::string& path, const std::string& key, const char* expected) {

@@ -120,8 +120,7 @@ TEST(YamlFile, YamlTagsOtherThanOpenCvMatrixAreRefusedBeforeParsing) {
   EXPECT_THAT(ErrorOf([&] { YamlFile f(hang); }),
               AllOf(HasSubstr(hang + ":3:"), HasSubstr("key 'x'"), HasSubstr("!!binary")));
   const std::string str = dir.Write("str.yaml", "%YAML:1.0\nlist: [1, !!str 2]\n");
-  EXPECT_THAT(ErrorOf([&] { YamlFile f(str); }),
-              AllOf(HasSubstr(str + ":2:"), HasSubstr("!!str")));
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(str); }), AllOf(HasSubstr(str + ":2:"), HasSubstr("!!str")));
   // Matrices keep their tag; a '!' inside text or a comment is no tag.
   const std::string fine = dir.Write("fine.yaml",
                                      "%YAML:1.0\nm: !!opencv-matrix\n   rows: 1\n   cols: 1\n"
