@@ -9,12 +9,8 @@ import random
 import cv2
 import numpy as np
 
-from helpers import Spec, any_line_of, clone, file_named, read_lines, write_lines
+from helpers import Spec, clone, damaged_line_names, file_named, read_lines, write_lines
 from mutate import byte_mutations, line_mutations, read_bytes, replace_file
-
-# Line damage a reader may take as data (fewer frames, whitespace) or refuse for the whole file.
-WHOLE_FILE = {"no_data", "one_line", "delete_line", "tabs", "reversed", "swap_lines"}
-
 
 def info_args(fmt, root, settings=None, extra=()):
     args = ["dataset", "info", root, "--format", fmt, "--check-images"] + list(extra)
@@ -26,19 +22,17 @@ def run_args(fmt, root, settings, d, extra=()):
              "--quiet", "--no-loop-closing"] + list(extra))
 
 
-def list_specs(rng, reader, fmt, base, rel_list, sep=" ", extra=(), max_fields=4):
-    """Every line mutation of base/rel_list."""
+def list_specs(rng, reader, fmt, base, rel_list, sep=" ", extra=None, max_fields=4):
+    """Every line mutation of base/rel_list; extra(root) gives more arguments."""
     lines = read_lines(os.path.join(base, rel_list))
     specs = []
-    for name, mutated in line_mutations(rng, lines, sep, max_fields):
-        def build(d, mutated=mutated, name=name):
+    for name, mutated, pick in line_mutations(rng, lines, sep, max_fields):
+        def build(d, mutated=mutated, pick=pick):
             root = clone(base, os.path.join(d, "seq"))
             path = os.path.join(root, rel_list)
             write_lines(path, mutated)
-            names = [file_named(path)]
-            if name not in WHOLE_FILE:
-                names.append(any_line_of(path))
-            return info_args(fmt, root, extra=extra), names
+            args = info_args(fmt, root, extra=extra(root) if extra else ())
+            return args, damaged_line_names(path, lines, pick)
         specs.append(Spec(reader, f"{rel_list.replace('/', '_')}_{name}", build))
     return specs
 
@@ -125,7 +119,8 @@ def tum_specs(rng, tum):
     for rel in ("rgb.txt", "depth.txt", "groundtruth.txt"):
         specs += list_specs(rng, "tum", "tum", tum, rel)
     specs += list_specs(rng, "tum", "tum", tum, "associations.txt",
-                        extra=("--associations", "associations.txt"))
+                        extra=lambda root: ("--associations",
+                                            os.path.join(root, "associations.txt")))
     first = sorted(os.listdir(os.path.join(tum, "rgb")))
     specs += image_specs(rng, "tum", "tum", tum, "rgb/" + first[3], settings=True, runs=8)
     specs += image_specs(rng, "tum", "tum", tum, "depth/" + first[5], depth=True, settings=True,

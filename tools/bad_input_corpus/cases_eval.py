@@ -5,10 +5,11 @@ times files, and run manifests of `eval table`."""
 import os
 import random
 
-from helpers import Spec, any_line_of, clone, file_named, read_lines, write_lines
+from helpers import Spec, any_line_of, clone, damaged_line_names, read_lines, write_lines
 from mutate import byte_mutations, line_mutations, read_bytes, replace_file
 
-WHOLE_FILE = {"no_data", "one_line", "delete_line", "tabs", "reversed", "swap_lines"}
+# The base sequences are a fraction of a second long: RPE over pairs 1 frame apart.
+EXTRA = {"ate": [], "rpe": ["--delta", "1", "--delta-unit", "f"]}
 
 
 def pair_specs(rng, tag, gt, est, commands, extra=(), max_fields=4):
@@ -16,17 +17,18 @@ def pair_specs(rng, tag, gt, est, commands, extra=(), max_fields=4):
     specs = []
     for which in ("est", "gt"):
         src = est if which == "est" else gt
-        for name, mutated in line_mutations(rng, read_lines(src), " ", max_fields):
+        lines = read_lines(src)
+        for name, mutated, pick in line_mutations(rng, lines, " ", max_fields):
+            if tag == "kitti" and name == "duplicate_line":
+                pick = None  # KITTI rows have no stamps: a repeated row is one pose too many
             for command in commands:
-                def build(d, mutated=mutated, name=name, which=which, command=command):
+                def build(d, mutated=mutated, pick=pick, which=which, command=command):
                     g = clone(gt, os.path.join(d, "gt.txt"))
                     e = clone(est, os.path.join(d, "est.txt"))
                     path = e if which == "est" else g
                     write_lines(path, mutated)
-                    names = [[path]]
-                    if name not in WHOLE_FILE:
-                        names.append(any_line_of(path))
-                    return ["eval", command, g, e] + list(extra), names
+                    return (["eval", command, g, e] + EXTRA[command] + list(extra),
+                            damaged_line_names(path, lines, pick))
                 specs.append(Spec("eval", f"{tag}_{command}_{which}_{name}", build))
     return specs
 
@@ -60,7 +62,7 @@ def kitti_specs(rng, kitti):
             write_lines(e, (lines * 40)[:rows])
             return ["eval", "ate", g, e], [[e, g]]
         specs.append(Spec("eval", f"kitti_index_{rows}_rows", build))
-    for name, mutated in line_mutations(rng, read_lines(times), " "):
+    for name, mutated, _ in line_mutations(rng, read_lines(times), " "):
         def build(d, mutated=mutated):
             g = clone(poses, os.path.join(d, "gt.txt"))
             t = os.path.join(d, "times.txt")
@@ -92,7 +94,7 @@ def manifest_specs(gt, est):
             m = os.path.join(d, "runs.csv")
             body = text if text is not None else "sequence,method,gt,est\nseq,a,{gt},{est}\n"
             replace_file(m, body.format(gt=g, est=e, d=d))
-            return ["eval", "table", "--manifest", m], [[m]]
+            return ["eval", "table", "--manifest", m] + EXTRA["rpe"], [[m]]
         specs.append(Spec("eval", f"manifest_{name}", build, valid=text is None))
     return specs
 
@@ -104,14 +106,15 @@ def byte_specs(rng, gt, est):
             g = clone(gt, os.path.join(d, "gt.txt"))
             e = os.path.join(d, "est.txt")
             replace_file(e, data)
-            return ["eval", "rpe", g, e], [[e]]
+            return ["eval", "rpe", g, e] + EXTRA["rpe"], [[e]]
         specs.append(Spec("eval", f"est_bytes_{name}", build))
 
-    def valid(d):
-        g = clone(gt, os.path.join(d, "gt.txt"))
-        e = clone(est, os.path.join(d, "est.txt"))
-        return ["eval", "ate", g, e], []
-    specs.append(Spec("eval", "valid", valid, valid=True))
+    for command in ("ate", "rpe"):
+        def valid(d, command=command):
+            g = clone(gt, os.path.join(d, "gt.txt"))
+            e = clone(est, os.path.join(d, "est.txt"))
+            return ["eval", command, g, e] + EXTRA[command], []
+        specs.append(Spec("eval", f"valid_{command}", valid, valid=True))
     return specs
 
 

@@ -9,7 +9,8 @@ import cv2
 import numpy as np
 
 from cases_datasets import image_variants, run_args
-from helpers import Spec, any_line_of, clone, file_named, line_or_key, read_lines, write_lines
+from helpers import (Spec, clone, damaged_line_names, file_named, line_or_key, read_lines,
+                     write_lines)
 from mutate import byte_mutations, line_mutations, read_bytes, replace_file
 
 CARD_VALUES = ["abc", "-1", "0", "1e9", "nan", "[1, 2]", "", "\"x\"", "{a: 1}", "1e-300"]
@@ -163,11 +164,11 @@ def vocab_specs(rng, inputs):
     text, binary = inputs["vocab_text"], inputs["vocab_binary"]
     specs = []
     lines = read_lines(text)
-    for name, mutated in line_mutations(rng, lines, " ", max_fields=6):
-        def build(d, mutated=mutated):
+    for name, mutated, pick in line_mutations(rng, lines, " ", max_fields=6):
+        def build(d, mutated=mutated, pick=pick):
             path = os.path.join(d, "voc.txt")
             write_lines(path, mutated)
-            return ["vocab", "info", path], [file_named(path)]
+            return ["vocab", "info", path], damaged_line_names(path, lines, pick)
         specs.append(Spec("vocab", f"text_{name}", build))
     for name, header in [("k0", "0 2 0 0"), ("huge_k", "100000 9 0 0"), ("scoring", "3 2 5 0"),
                          ("weighting", "3 2 0 3"), ("negative", "-3 2 0 0"), ("short", "3 2")]:

@@ -183,6 +183,10 @@ def main():
         futures = [pool.submit(run_case, s, args, work) for s in specs]
         for future in concurrent.futures.as_completed(futures):
             results.append(future.result())
+            if len(results) % 100 == 0 or results[-1][1] in FAILURES:
+                spec, verdict = results[-1][:2]
+                print(f"{len(results)}/{len(specs)} after {time.monotonic() - start:.0f} s; "
+                      f"last: {spec.reader}/{spec.name}: {verdict}", flush=True)
     results.sort(key=lambda r: (r[0].reader, r[0].name))
     write_tsv(results, os.path.join(work, "report.tsv"))
     failures = [r for r in results if r[1] in FAILURES]

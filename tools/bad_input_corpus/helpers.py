@@ -59,3 +59,16 @@ def line_or_key(path, line=None, key=None):
 def any_line_of(path):
     """"<file>:<some line number>", with the file as file_named gives it."""
     return [re.compile(re.escape(p) + r":\d+") for p in file_named(path)]
+
+
+def damaged_line_names(path, lines, pick):
+    """What a message about line `pick` of `path` (None: the whole file) must name: the file,
+    and a line of it or the line's key ("P1" of KITTI's "P1: ...")."""
+    names = [file_named(path)]
+    if pick is not None:
+        alts = any_line_of(path)
+        first = lines[pick].split()[0] if lines[pick].split() else ""
+        if first.endswith(":"):
+            alts.append(first[:-1])
+        names.append(alts)
+    return names

@@ -33,7 +33,8 @@ def data_line_indices(lines):
 
 
 def line_mutations(rng, lines, field_sep=" ", max_fields=4):
-    """(name, new lines) pairs that break a line-oriented list: each a different kind of damage."""
+    """(name, new lines, damaged line index) triples that break a line-oriented list: each a
+    different kind of damage, most of them to one line picked at random."""
     idx = data_line_indices(lines)
     out = []
     if not idx:
@@ -54,21 +55,23 @@ def line_mutations(rng, lines, field_sep=" ", max_fields=4):
 
     for k in sorted(rng.sample(range(len(fields)), min(max_fields, len(fields)))):
         for bad in rng.sample(BAD_NUMBERS, 3):
-            out.append((f"field{k}_{bad or 'empty'}", with_field(pick, k, bad)))
-    out.append(("drop_field", with_line(pick, field_sep.join(fields[:-1]))))
-    out.append(("extra_field", with_line(pick, lines[pick] + field_sep + "7")))
-    out.append(("only_first_field", with_line(pick, fields[0])))
-    out.append(("swap_lines", _swapped(lines, first, last)))
-    out.append(("duplicate_line", lines[:pick + 1] + [lines[pick]] + lines[pick + 1:]))
-    out.append(("reversed", [lines[i] for i in range(len(lines)) if i not in idx] +
-                [lines[i] for i in reversed(idx)]))
-    out.append(("delete_line", lines[:pick] + lines[pick + 1:]))
-    out.append(("truncate_mid_line", lines[:pick] + [lines[pick][:len(lines[pick]) // 2]]))
-    out.append(("tabs", [line.replace(field_sep, "\t") for line in lines]))
-    out.append(("garbage_line", with_line(pick, "\x00\x01\xff garbage \x7f")))
-    out.append(("huge_line", with_line(pick, lines[pick] + " " + "9" * 300000)))
-    out.append(("no_data", [lines[i] for i in range(len(lines)) if i not in idx]))
-    out.append(("one_line", [lines[first]]))
+            out.append((f"field{k}_{bad or 'empty'}", with_field(pick, k, bad), pick))
+    others = [lines[i] for i in range(len(lines)) if i not in idx]
+    out += [
+        ("drop_field", with_line(pick, field_sep.join(fields[:-1])), pick),
+        ("extra_field", with_line(pick, lines[pick] + field_sep + "7"), pick),
+        ("only_first_field", with_line(pick, fields[0]), pick),
+        ("swap_lines", _swapped(lines, first, last), first),
+        ("duplicate_line", lines[:pick + 1] + [lines[pick]] + lines[pick + 1:], pick + 1),
+        ("reversed", others + [lines[i] for i in reversed(idx)], None),
+        ("delete_line", lines[:pick] + lines[pick + 1:], None),
+        ("truncate_mid_line", lines[:pick] + [lines[pick][:len(lines[pick]) // 2]], pick),
+        ("tabs", [line.replace(field_sep, "\t") for line in lines], None),
+        ("garbage_line", with_line(pick, "\x00\x01\xff garbage \x7f"), pick),
+        ("huge_line", with_line(pick, lines[pick] + " " + "9" * 300000), pick),
+        ("no_data", others, None),
+        ("one_line", [lines[first]], None),
+    ]
     return out
 
 
