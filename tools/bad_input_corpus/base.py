@@ -95,7 +95,11 @@ def make_estimate(gt, out, seed):
 
 
 def make_base_inputs(moslam, base):
-    """Paths of the base inputs (a dict); made once per work folder and reused."""
+    """Paths of the base inputs (a dict); made once per work folder and reused. The marker file
+    is written last, so that inputs an interrupted run left half made are made again."""
+    marker = os.path.join(base, "complete")
+    if not os.path.isfile(marker) and os.path.isdir(base):
+        shutil.rmtree(base)
     os.makedirs(base, exist_ok=True)
     tum = os.path.join(base, "tum")
     kitti = os.path.join(base, "kitti")
@@ -107,6 +111,7 @@ def make_base_inputs(moslam, base):
     vocab_text, vocab_binary = make_vocabulary(moslam, os.path.join(base, "vocab"))
     estimate = os.path.join(base, "estimate.txt")
     make_estimate(os.path.join(tum, "groundtruth.txt"), estimate, 3)
+    open(marker, "w").close()
     shared = os.environ.get("MOSLAM_SHARED", os.path.join(os.path.dirname(REPO), "shared"))
     return {
         "repo": REPO, "base": base, "tum": tum, "kitti": kitti,

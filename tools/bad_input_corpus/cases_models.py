@@ -195,6 +195,19 @@ def vocab_specs(rng, inputs):
                              ["--vocabulary", path]), [file_named(path)])
         specs.append(Spec("vocab", f"run_{name}", run, cost=3))
 
+    def directory(d):
+        return ["vocab", "info", d], [file_named(d)]
+
+    def absent(d):
+        return ["vocab", "info", os.path.join(d, "none.mvoc")], [[os.path.join(d, "none.mvoc")]]
+
+    def run_directory(d):
+        tum = inputs["tum"]
+        return (run_args("tum", tum, os.path.join(tum, "settings.yaml"), d, ["--vocabulary", d]),
+                [file_named(d)])
+    specs += [Spec("vocab", "directory", directory), Spec("vocab", "absent", absent),
+              Spec("vocab", "run_directory", run_directory, cost=3)]
+
     def valid(d):
         return ["vocab", "info", clone(binary, os.path.join(d, "voc.mvoc"))], []
     specs.append(Spec("vocab", "valid", valid, valid=True))

@@ -8,12 +8,13 @@ import random
 from helpers import Spec, clone, file_named, line_or_key, read_lines, write_lines
 from mutate import BAD_SETTINGS_VALUES, replace_file
 
-# Values for which a run must stop before tracking, naming the key (issue 31's aborts).
+# Values for which a run must stop before tracking, naming the key (issue 31's aborts), or that
+# the images contradict (a 640x480 camera for 320x240 images).
 RUN_ABSURD = [("Camera.fx", "1e-300"), ("Camera.fx", "1e300"), ("Camera.fy", "1e300"),
               ("Camera.k1", "-1e6"), ("Camera.k3", "1e300"), ("Camera.p1", "0.9"),
               ("Camera.cx", "-5"), ("Camera.bf", "1e-9"), ("ORBextractor.nFeatures", "1"),
               ("ORBextractor.nLevels", "1"), ("ORBextractor.scaleFactor", "1.0001"),
-              ("DepthMapFactor", "1e-30")]
+              ("DepthMapFactor", "1e-30"), ("Camera.width", "640"), ("Camera.height", "480")]
 
 STRUCTURAL = {
     "empty": b"",

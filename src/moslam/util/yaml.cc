@@ -1,6 +1,9 @@
 #include "moslam/util/yaml.h"
 
 #include <cmath>
+#include <fstream>
+#include <limits>
+#include <optional>
 
 #include <opencv2/core.hpp>
 
@@ -106,6 +109,55 @@ void RejectTags(const std::string& path) {
       });
 }
 
+// Throws InputError at a "key:" with nothing after it and no block indented below it: YAML's
+// null (or a list at the key's own indentation), which OpenCV refuses as "Incorrect
+// indentation" at the line after, away from the key the user has to fix.
+void RejectEmptyValues(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string raw;
+  int number = 0;
+  int open_line = 0;  // the line of a "key:" that needs a block below it; 0: none
+  size_t open_indent = 0;
+  std::string open_name;
+  auto close = [&](size_t indent) {
+    if (open_line > 0 && indent <= open_indent) {
+      ThrowAtLine(
+          path, open_line,
+          fmt::format("key '{}' has no value (nor a block indented below it)", Excerpt(open_name)));
+    }
+    open_line = 0;
+  };
+  while (std::getline(in, raw)) {
+    ++number;
+    const size_t indent = raw.find_first_not_of(" \t\r");
+    if (indent == std::string::npos || raw[indent] == '#' || raw[indent] == '%') continue;
+    const std::string_view text = Trim(std::string_view(raw).substr(indent));
+    close(indent);
+    if (text.size() > 1 && text.back() == ':' && text.find(": ") == std::string_view::npos &&
+        text.find_first_of("\"'{[") == std::string_view::npos) {
+      open_line = number;
+      open_indent = indent;
+      open_name = std::string(text.substr(0, text.size() - 1));
+    }
+  }
+  close(0);
+}
+
+// OpenCV's parser puts "<file>(<line>): <reason>" into cv::Exception::func and the name of its
+// parsing function into err: the line and the reason are what a user can act on.
+[[noreturn]] void ThrowParseError(const std::string& path, const cv::Exception& e) {
+  const size_t close = e.func.rfind("): ");
+  const size_t open = close == std::string::npos ? close : e.func.rfind('(', close);
+  if (open != std::string::npos) {
+    const std::optional<long long> line = ParseInt(e.func.substr(open + 1, close - open - 1));
+    if (line && *line > 0 && *line <= std::numeric_limits<int>::max()) {
+      ThrowAtLine(path, static_cast<int>(*line),
+                  fmt::format("is not valid YAML: {}", Excerpt(e.func.substr(close + 3))));
+    }
+  }
+  ThrowInFile(path, fmt::format("is not valid YAML: {}", Excerpt(e.err)));
+}
+
 [[noreturn]] void WrongType(const std::string& path, const std::string& key, const char* expected) {
   ThrowInFile(path, fmt::format("key '{}' must be {}", Excerpt(key), expected));
 }
@@ -115,12 +167,13 @@ void RejectTags(const std::string& path) {
 YamlFile::YamlFile(const std::string& path) : path_(path), impl_(std::make_unique<Impl>()) {
   RequireFile(path, "YAML options file");
   RejectTags(path);
+  RejectEmptyValues(path);
   // OpenCV's parser reports some malformed input with other exceptions than cv::Exception
   // (std::length_error from a string it sizes from garbage): all of them are bad input here.
   try {
     impl_->storage.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
-    ThrowInFile(path, fmt::format("is not valid YAML: {}", Excerpt(e.err)));
+    ThrowParseError(path, e);
   } catch (const std::exception& e) {
     ThrowInFile(path, fmt::format("is not valid YAML ({})", Excerpt(e.what())));
   }

@@ -86,9 +86,22 @@ TEST(YamlFile, MissingOrMalformedFileIsAnInputError) {
   EXPECT_THAT(ErrorOf([&] { YamlFile f(dir.path() + "/none.yaml"); }), HasSubstr("none.yaml"));
   const std::string bad = dir.Write("bad.yaml", "%YAML:1.0\na: [1, 2\nb: {\n");
   EXPECT_THAT(ErrorOf([&] { YamlFile f(bad); }), HasSubstr("bad.yaml"));
+  // Issue 31: a key without a value is named at its line (OpenCV stops at the next one), and
+  // other parse errors at the line OpenCV's parser gives, with its reason.
+  const std::string empty_value = dir.Write("e.yaml", "%YAML:1.0\na: 1\nb: \nc: 3\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(empty_value); }),
+              HasSubstr(empty_value + ":3: key 'b' has no value"));
+  const std::string last = dir.Write("last.yaml", "%YAML:1.0\na: 1\nb:\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(last); }), HasSubstr(last + ":3: key 'b' has no value"));
+  const std::string indent = dir.Write("i.yaml", "%YAML:1.0\na: 1\n  b: 2\nc: 3\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(indent); }), HasSubstr(indent + ":"));
+  // A key may open a block indented below it: a map or a list.
+  const std::string blocks = dir.Write("b.yaml", "%YAML:1.0\nm:\n  x: 1\nn:\n   - 3\n");
+  YamlFile f(blocks);
+  EXPECT_EQ(f.Required<int>("m.x"), 1);
+  EXPECT_EQ(f.Required<std::vector<double>>("n"), (std::vector<double>{3}));
 }
 
-// Issue 31: OpenCV reads "0x217" as 535 and "017" as 15; an options file never means them.
 TEST(YamlFile, HexadecimalAndOctalNumbersAreRefusedNamingKeyAndLine) {
   testing::TempDir dir;
   const std::string hex = dir.Write("hex.yaml", "%YAML:1.0\na: 1\nCamera.fx: 0x217\n");
