@@ -222,6 +222,7 @@ TableRun ParseRunSpec(const std::string& spec) {
 
 std::vector<TableRun> ReadRunManifest(const std::string& path) {
   std::vector<TableRun> runs;
+  std::map<std::pair<std::string, std::string>, int> line_of;  // (sequence, method) -> line
   for (const TextLine& line : ReadDataLines(path)) {
     if (runs.empty() && StartsWith(ToLower(line.text), "sequence")) continue;  // header
     const std::optional<TableRun> run = RunFromFields(SplitOn(line.text, ','));
@@ -237,6 +238,12 @@ std::vector<TableRun> ReadRunManifest(const std::string& path) {
         ThrowAtLine(path, line.number,
                     fmt::format("{} '{}' is not an existing file", what, Excerpt(file, 200)));
       }
+    }
+    const auto [it, added] = line_of.emplace(std::pair{run->sequence, run->method}, line.number);
+    if (!added) {
+      ThrowAtLine(path, line.number,
+                  fmt::format("a second run of method '{}' on sequence '{}' (the first: line {})",
+                              Excerpt(run->method), Excerpt(run->sequence), it->second));
     }
     runs.push_back(*run);
   }

@@ -65,6 +65,10 @@ TEST(Table, ManifestRowWhosePathsAreNoFilesIsNamedByLine) {
   const std::string quoted = dir.Write("q.csv", fmt::format("\"s1,a\",ORB,{},{}\n", g, e));
   EXPECT_THAT(ErrorOf([&] { ReadRunManifest(quoted); }),
               AllOf(HasSubstr(quoted + ":1:"), HasSubstr("not an existing file")));
+  const std::string twice =
+      dir.Write("t.csv", fmt::format("s,a,{0},{1}\ns,b,{0},{1}\ns,a,{0},{1}\n", g, e));
+  EXPECT_THAT(ErrorOf([&] { ReadRunManifest(twice); }),
+              AllOf(HasSubstr(twice + ":3: a second run of method 'a'"), HasSubstr("line 1")));
   const std::string missing = dir.Write("m.csv", fmt::format("s1,ORB,{},none.txt\n", g));
   EXPECT_THAT(ErrorOf([&] { ReadRunManifest(missing); }),
               AllOf(HasSubstr(missing + ":1:"), HasSubstr("est 'none.txt'")));

@@ -61,6 +61,12 @@ struct StereoRectification {
   RectificationCamera right;  // RIGHT.*
 };
 
+// Plausibility bounds of OrbSlamSettings::Check (issue 31: absurd values ran silently).
+inline constexpr double kMinBaselineMetres = 1e-4;
+inline constexpr double kMaxBaselineMetres = 1e3;
+inline constexpr double kMinDepthMapFactor = 1e-3;
+inline constexpr double kMaxDepthMapFactor = 1e6;
+
 struct OrbSlamSettings {
   camera::PinholeOptions camera;     // Camera.fx, fy, cx, cy, k1, k2, p1, p2, k3, width, height
   double fps = 30.0;                 // Camera.fps: frames per second (> 0)

@@ -219,8 +219,10 @@ TEST(LoadOrbSlamSettings, InvalidValuesNameTheKeyAndFile) {
 TEST(LoadOrbSlamSettings, AbsurdCameraValuesNameTheKeyAndFile) {
   testing::TempDir dir;
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"Camera.fx", "1e-300"}, {"Camera.fx", "1e300"}, {"Camera.fy", "1e300"}, {"Camera.fy", "0.5"},
-      {"Camera.k1", "-1e6"},   {"Camera.k3", "1e300"}, {"Camera.p1", "0.9"},
+      {"Camera.fx", "1e-300"},     {"Camera.fx", "1e300"},    {"Camera.fy", "1e300"},
+      {"Camera.fy", "0.5"},        {"Camera.k1", "-1e6"},     {"Camera.k3", "1e300"},
+      {"Camera.p1", "0.9"},        {"Camera.bf", "1e-9"},     {"Camera.bf", "1e9"},
+      {"DepthMapFactor", "1e-30"}, {"DepthMapFactor", "1e9"},
   };
   for (const auto& [key, value] : cases) {
     const std::string path = dir.Write("s.yaml", SettingsText(With(RgbdKeys(), key, value)));

@@ -109,21 +109,42 @@ void RejectTags(const std::string& path) {
       });
 }
 
-// Throws InputError at a "key:" with nothing after it and no block indented below it: YAML's
-// null (or a list at the key's own indentation), which OpenCV refuses as "Incorrect
-// indentation" at the line after, away from the key the user has to fix.
-void RejectEmptyValues(const std::string& path) {
+// The key and value of a "key: value" or "key:" line, when the line is one.
+struct KeyLine {
+  std::string key;
+  std::string_view value;  // "" for "key:"
+};
+
+std::optional<KeyLine> SplitKeyLine(std::string_view text) {
+  const size_t colon = text.find(": ");
+  if (colon != std::string_view::npos) {
+    return KeyLine{std::string(Trim(text.substr(0, colon))), Trim(text.substr(colon + 2))};
+  }
+  if (text.size() > 1 && text.back() == ':') {
+    return KeyLine{std::string(text.substr(0, text.size() - 1)), {}};
+  }
+  return std::nullopt;
+}
+
+// Throws InputError at a key whose block structure OpenCV refuses as "Incorrect indentation" at
+// the line after, away from the key the user has to fix: a "key:" with no block indented below
+// it (YAML's null, or a list at the key's own indentation), and a "key: value" with a plain
+// value and a block indented below it as well (a matrix's value replaced by a number).
+void RejectBadBlocks(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string raw;
   int number = 0;
-  int open_line = 0;  // the line of a "key:" that needs a block below it; 0: none
+  int open_line = 0;  // the last key line, while its block (or lack of one) is undecided
+  bool needs_block = false;
   size_t open_indent = 0;
-  std::string open_name;
-  auto close = [&](size_t indent) {
-    if (open_line > 0 && indent <= open_indent) {
-      ThrowAtLine(
-          path, open_line,
-          fmt::format("key '{}' has no value (nor a block indented below it)", Excerpt(open_name)));
+  std::string open_key;
+  auto next = [&](size_t indent) {
+    if (open_line > 0 && needs_block == (indent <= open_indent)) {
+      ThrowAtLine(path, open_line,
+                  needs_block ? fmt::format("key '{}' has no value (nor a block indented below it)",
+                                            Excerpt(open_key))
+                              : fmt::format("key '{}' has a value and a block indented below it",
+                                            Excerpt(open_key)));
     }
     open_line = 0;
   };
@@ -132,15 +153,19 @@ void RejectEmptyValues(const std::string& path) {
     const size_t indent = raw.find_first_not_of(" \t\r");
     if (indent == std::string::npos || raw[indent] == '#' || raw[indent] == '%') continue;
     const std::string_view text = Trim(std::string_view(raw).substr(indent));
-    close(indent);
-    if (text.size() > 1 && text.back() == ':' && text.find(": ") == std::string_view::npos &&
-        text.find_first_of("\"'{[") == std::string_view::npos) {
-      open_line = number;
-      open_indent = indent;
-      open_name = std::string(text.substr(0, text.size() - 1));
+    next(indent);
+    const std::optional<KeyLine> line = SplitKeyLine(text);
+    // Values in brackets or quotes may go on over several lines; tags open a block.
+    if (!line || line->key.find_first_of("\"'{[") != std::string::npos ||
+        line->value.find_first_of("\"'{[!|>&*#") != std::string_view::npos) {
+      continue;
     }
+    open_line = number;
+    open_indent = indent;
+    open_key = line->key;
+    needs_block = line->value.empty();
   }
-  close(0);
+  next(0);
 }
 
 // OpenCV's parser puts "<file>(<line>): <reason>" into cv::Exception::func and the name of its
@@ -167,7 +192,7 @@ void RejectEmptyValues(const std::string& path) {
 YamlFile::YamlFile(const std::string& path) : path_(path), impl_(std::make_unique<Impl>()) {
   RequireFile(path, "YAML options file");
   RejectTags(path);
-  RejectEmptyValues(path);
+  RejectBadBlocks(path);
   // OpenCV's parser reports some malformed input with other exceptions than cv::Exception
   // (std::length_error from a string it sizes from garbage): all of them are bad input here.
   try {

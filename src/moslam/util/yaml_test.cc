@@ -95,10 +95,16 @@ TEST(YamlFile, MissingOrMalformedFileIsAnInputError) {
   EXPECT_THAT(ErrorOf([&] { YamlFile f(last); }), HasSubstr(last + ":3: key 'b' has no value"));
   const std::string indent = dir.Write("i.yaml", "%YAML:1.0\na: 1\n  b: 2\nc: 3\n");
   EXPECT_THAT(ErrorOf([&] { YamlFile f(indent); }), HasSubstr(indent + ":"));
-  // A key may open a block indented below it: a map or a list.
-  const std::string blocks = dir.Write("b.yaml", "%YAML:1.0\nm:\n  x: 1\nn:\n   - 3\n");
+  const std::string both =
+      dir.Write("m.yaml", "%YAML:1.0\nD: 0.5\n   rows: 1\n   cols: 1\n   data: [1.0]\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(both); }),
+              HasSubstr(both + ":2: key 'D' has a value and a block indented below it"));
+  // A key may open a block indented below it: a map or a list; a list may go on over lines.
+  const std::string blocks =
+      dir.Write("b.yaml", "%YAML:1.0\nm:\n  x: 1\nn:\n   - 3\nl: [1,\n     2]\n");
   YamlFile f(blocks);
   EXPECT_EQ(f.Required<int>("m.x"), 1);
+  EXPECT_EQ(f.Required<std::vector<double>>("l"), (std::vector<double>{1, 2}));
   EXPECT_EQ(f.Required<std::vector<double>>("n"), (std::vector<double>{3}));
 }
 
