@@ -126,6 +126,22 @@ std::optional<KeyLine> SplitKeyLine(std::string_view text) {
   return std::nullopt;
 }
 
+// Whether `value` is one whole quoted string or flow collection: "...", '...', [...], {...}
+// with its brackets balanced (quotes inside a collection are not looked into).
+bool ClosesOnItsLine(std::string_view value) {
+  if (value.size() < 2) return false;
+  const char first = value.front();
+  const char last = value.back();
+  if (first == '"' || first == '\'') return last == first;
+  if (!((first == '[' && last == ']') || (first == '{' && last == '}'))) return false;
+  int depth = 0;
+  for (const char c : value) {
+    depth += (c == '[' || c == '{') - (c == ']' || c == '}');
+    if (depth < 0) return false;
+  }
+  return depth == 0;
+}
+
 // Throws InputError at a key whose block structure OpenCV refuses as "Incorrect indentation" at
 // the line after, away from the key the user has to fix: a "key:" with no block indented below
 // it (YAML's null, or a list at the key's own indentation), and a "key: value" with a plain
@@ -155,9 +171,11 @@ void RejectBadBlocks(const std::string& path) {
     const std::string_view text = Trim(std::string_view(raw).substr(indent));
     next(indent);
     const std::optional<KeyLine> line = SplitKeyLine(text);
-    // Values in brackets or quotes may go on over several lines; tags open a block.
+    // Values in brackets or quotes may go on over several lines (unless they close on this one);
+    // tags open a block.
     if (!line || line->key.find_first_of("\"'{[") != std::string::npos ||
-        line->value.find_first_of("\"'{[!|>&*#") != std::string_view::npos) {
+        (!ClosesOnItsLine(line->value) &&
+         line->value.find_first_of("\"'{[!|>&*#") != std::string_view::npos)) {
       continue;
     }
     open_line = number;

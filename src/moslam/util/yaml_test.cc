@@ -99,6 +99,13 @@ TEST(YamlFile, MissingOrMalformedFileIsAnInputError) {
       dir.Write("m.yaml", "%YAML:1.0\nD: 0.5\n   rows: 1\n   cols: 1\n   data: [1.0]\n");
   EXPECT_THAT(ErrorOf([&] { YamlFile f(both); }),
               HasSubstr(both + ":2: key 'D' has a value and a block indented below it"));
+  for (const char* value : {"\"12\"", "[1, 2]", "{a: 1}"}) {
+    const std::string quoted =
+        dir.Write("q.yaml", fmt::format("%YAML:1.0\nD: {}\n   rows: 1\n   data: [1.0]\n", value));
+    EXPECT_THAT(ErrorOf([&] { YamlFile f(quoted); }),
+                HasSubstr(quoted + ":2: key 'D' has a value and a block"))
+        << value;
+  }
   // A key may open a block indented below it: a map or a list; a list may go on over lines.
   const std::string blocks =
       dir.Write("b.yaml", "%YAML:1.0\nm:\n  x: 1\nn:\n   - 3\nl: [1,\n     2]\n");
