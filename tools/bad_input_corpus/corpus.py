@@ -137,7 +137,7 @@ def parse_args():
     p.add_argument("--work", default="out/bad_input_corpus", help="folder for inputs and report")
     p.add_argument("--seed", type=int, default=31)
     p.add_argument("--fast", action="store_true", help="the CI subset (a few hundred cases)")
-    p.add_argument("--fast-budget", type=int, default=240, help="cost units of the fast subset")
+    p.add_argument("--fast-budget", type=int, default=300, help="cost units of the fast subset")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--timeout", type=float, default=60.0, help="seconds per case")
     p.add_argument("--reader", action="append", help="only these readers (repeatable)")
