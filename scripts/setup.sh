@@ -15,6 +15,8 @@ PACKAGES=(
   libosmesa6-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the bad-input corpus (tools/bad_input_corpus, docs/ROBUSTNESS.md): images and .npy files
+  python3-numpy python3-opencv
 )
 
 missing=()

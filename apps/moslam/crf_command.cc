@@ -53,6 +53,18 @@ std::string NpyField(const std::string& header, const std::string& key, const st
   return std::string(Trim(header.substr(colon + 1, end - colon - 1)));
 }
 
+// The CRF's own checks of the probabilities (2..32 labels, finite, the image's size) know no
+// file; its InputErrors are the probabilities file's (issue 31).
+semantic::CrfResult InferNamingFiles(semantic::DenseCrf& crf, const cv::Mat& image,
+                                     const cv::Mat& depth, const cv::Mat& probs,
+                                     const CrfArgs& args) {
+  try {
+    return crf.Infer(image, depth, semantic::Unaries::FromProbabilities(probs));
+  } catch (const InputError& e) {
+    ThrowInFile(args.probs, fmt::format("{} (image {})", e.what(), args.image));
+  }
+}
+
 // A NumPy .npy array of float32 or float64, C order, shape (H, W, L): H x W CV_32FC(L).
 cv::Mat ReadNpy(const std::string& path) {
   RequireFile(path, "probabilities");
@@ -198,9 +210,8 @@ void Run(CrfArgs args) {
     spdlog::warn("--depth is ignored with --kernels c");
   }
   semantic::DenseCrf crf(o);
-  const auto unaries = semantic::Unaries::FromProbabilities(probs);
   const auto start = std::chrono::steady_clock::now();
-  const semantic::CrfResult result = crf.Infer(image8, depth, unaries);
+  const semantic::CrfResult result = InferNamingFiles(crf, image8, depth, probs, args);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const cv::Mat before = ArgMax(ToPlanar(probs));
@@ -213,7 +224,7 @@ void Run(CrfArgs args) {
   }
   const int changed = cv::countNonZero(before != result.labels);
   std::printf("%dx%d, %d labels, kernels %s: %d pixels (%.2f%%) changed label, %.1f ms\n",
-              image8.cols, image8.rows, unaries.num_labels(), args.kernels.c_str(), changed,
+              image8.cols, image8.rows, probs.channels(), args.kernels.c_str(), changed,
               100.0 * changed / static_cast<double>(before.total()), ms);
 }
 

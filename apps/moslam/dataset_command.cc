@@ -78,8 +78,19 @@ void PrintSettings(const io::OrbSlamSettings& s, const std::string& path) {
 // Loads every image of the sequence; reports the first unreadable one as an InputError.
 void CheckImages(const io::Sequence& seq, double depth_factor) {
   Progress progress("checking images", seq.size(), 2.0, "frames");
+  cv::Size first;
   for (const io::FrameEntry& frame : seq.frames) {
-    io::LoadFrameImages(frame, io::ColourMode::kGrey, depth_factor);
+    const cv::Size size =
+        io::LoadFrameImages(frame, io::ColourMode::kGrey, depth_factor).left.size();
+    // One camera, one size: a frame of another size would be tracked with the wrong intrinsics
+    // (issue 31; `moslam run` refuses it too).
+    if (first.empty()) first = size;
+    if (size != first) {
+      ThrowInFile(frame.image_left,
+                  fmt::format("frame {} is {}x{}, but the first frame ({}) is {}x{}", frame.index,
+                              size.width, size.height, seq.frames.front().image_left, first.width,
+                              first.height));
+    }
     progress.Update(static_cast<size_t>(frame.index) + 1);
   }
   progress.Finish();

@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "moslam/io/dataset.h"
+#include "moslam/io/image.h"
 #include "moslam/io/orbslam_settings.h"
 #include "moslam/net/blas_core.h"
 #include "moslam/runner/mask_damage.h"
@@ -168,6 +169,22 @@ runner::MaskOptions MakeMaskOptions(const RunArgs& args) {
   return options;
 }
 
+// The image size the intrinsics are for: the settings', or the first frame's when they give
+// none, so that the checks that need a size (distortion invertible over the image, principal
+// point inside it) still run before tracking, and every later frame must match it (issue 31).
+void SetImageSize(const io::Sequence& sequence, const std::string& settings_path,
+                  io::OrbSlamSettings* settings, runner::RunOptions* options) {
+  std::string source = settings_path;
+  if (!settings->camera.HasSize()) {
+    const std::string& first = sequence.frames.front().image_left;
+    const cv::Mat image = io::LoadGreyImage(first);
+    io::CompleteImageSize(settings, settings_path, image.cols, image.rows, first);
+    source = fmt::format("{} (none given there: the first frame's, {})", settings_path, first);
+  }
+  options->image_size = cv::Size(settings->camera.width, settings->camera.height);
+  options->image_size_source = source;
+}
+
 void Run(const RunArgs& args) {
   const auto format = io::ParseDatasetFormat(args.dataset.at(0));
   if (!format || *format == io::DatasetFormat::kAuto) {
@@ -210,10 +227,7 @@ void Run(const RunArgs& args) {
   options.colour =
       sequence.sensor == io::SensorType::kRgbD ? io::ColourMode::kColour : io::ColourMode::kGrey;
   options.depth_factor = settings.depth_map_factor;
-  if (settings.camera.HasSize()) {
-    options.image_size = cv::Size(settings.camera.width, settings.camera.height);
-    options.image_size_source = args.settings;
-  }
+  SetImageSize(sequence, args.settings, &settings, &options);
 
   runner::RunDescription description;
   description.dataset_path = sequence.root;

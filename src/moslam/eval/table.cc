@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <map>
 
@@ -221,11 +222,28 @@ TableRun ParseRunSpec(const std::string& spec) {
 
 std::vector<TableRun> ReadRunManifest(const std::string& path) {
   std::vector<TableRun> runs;
+  std::map<std::pair<std::string, std::string>, int> line_of;  // (sequence, method) -> line
   for (const TextLine& line : ReadDataLines(path)) {
     if (runs.empty() && StartsWith(ToLower(line.text), "sequence")) continue;  // header
     const std::optional<TableRun> run = RunFromFields(SplitOn(line.text, ','));
     if (!run) {
       ThrowAtLine(path, line.number, "expected sequence,method,gt,est[,gt_times]");
+    }
+    // Checked here so that a path the row gets wrong (a quoted field with a comma splits the row
+    // elsewhere) is reported at its line, not as a lone file name later.
+    for (const auto& [what, file] :
+         {std::pair{"gt", run->gt_path}, {"est", run->est_path}, {"gt_times", run->gt_times}}) {
+      std::error_code ec;
+      if (!file.empty() && !std::filesystem::is_regular_file(file, ec)) {
+        ThrowAtLine(path, line.number,
+                    fmt::format("{} '{}' is not an existing file", what, Excerpt(file, 200)));
+      }
+    }
+    const auto [it, added] = line_of.emplace(std::pair{run->sequence, run->method}, line.number);
+    if (!added) {
+      ThrowAtLine(path, line.number,
+                  fmt::format("a second run of method '{}' on sequence '{}' (the first: line {})",
+                              Excerpt(run->method), Excerpt(run->sequence), it->second));
     }
     runs.push_back(*run);
   }

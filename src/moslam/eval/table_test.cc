@@ -7,13 +7,16 @@
 
 #include "moslam/eval/test_trajectories.h"
 #include "moslam/eval/trajectory_io.h"
+#include "moslam/testing/error_of.h"
 #include "moslam/testing/shared_data.h"
 #include "moslam/util/error.h"
 
 namespace moslam::eval {
 namespace {
 
+using moslam::testing::ErrorOf;
 using moslam::testing::TempDir;
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 TEST(Table, ImprovementFormula) {
@@ -36,17 +39,39 @@ TEST(Table, RunSpecs) {
 
 TEST(Table, ManifestWithHeaderAndBadLineNamed) {
   TempDir dir;
+  const std::string g = dir.Write("g.txt", "");
+  const std::string e = dir.Write("e.txt", "");
+  const std::string o = dir.Write("o.txt", "");
   const auto runs = ReadRunManifest(dir.Write(
       "runs.csv",
-      "sequence,method,gt,est\n# comment\ns1,ORB-SLAM2,g.txt,e.txt\ns1,Ours,g.txt,o.txt\n"));
+      fmt::format("sequence,method,gt,est\n# comment\ns1,ORB-SLAM2,{},{}\ns1,Ours,{},{}\n", g, e, g,
+                  o)));
   ASSERT_EQ(runs.size(), 2u);
-  EXPECT_EQ(runs[1].est_path, "o.txt");
+  EXPECT_EQ(runs[1].est_path, o);
   try {
-    ReadRunManifest(dir.Write("bad.csv", "s1,ORB,g.txt,e.txt\ns2,ORB\n"));
+    ReadRunManifest(dir.Write("bad.csv", fmt::format("s1,ORB,{},{}\ns2,ORB\n", g, e)));
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("bad.csv:2:"));
   }
+}
+
+// Issue 31: a quoted field with a comma shifted the row, and the error named only "a", the
+// field taken for the ground truth; the manifest's line is named now.
+TEST(Table, ManifestRowWhosePathsAreNoFilesIsNamedByLine) {
+  TempDir dir;
+  const std::string g = dir.Write("g.txt", "");
+  const std::string e = dir.Write("e.txt", "");
+  const std::string quoted = dir.Write("q.csv", fmt::format("\"s1,a\",ORB,{},{}\n", g, e));
+  EXPECT_THAT(ErrorOf([&] { ReadRunManifest(quoted); }),
+              AllOf(HasSubstr(quoted + ":1:"), HasSubstr("not an existing file")));
+  const std::string twice =
+      dir.Write("t.csv", fmt::format("s,a,{0},{1}\ns,b,{0},{1}\ns,a,{0},{1}\n", g, e));
+  EXPECT_THAT(ErrorOf([&] { ReadRunManifest(twice); }),
+              AllOf(HasSubstr(twice + ":3: a second run of method 'a'"), HasSubstr("line 1")));
+  const std::string missing = dir.Write("m.csv", fmt::format("s1,ORB,{},none.txt\n", g));
+  EXPECT_THAT(ErrorOf([&] { ReadRunManifest(missing); }),
+              AllOf(HasSubstr(missing + ":1:"), HasSubstr("est 'none.txt'")));
 }
 
 ErrorStatistics Stats(double rmse, double mean, double median, double std) {

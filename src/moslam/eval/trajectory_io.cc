@@ -64,6 +64,20 @@ struct Skips {
   }
 };
 
+// Positions are metres: beyond 1e9 m (six times the Earth-Sun distance) a value is a typo or
+// garbage, and the squares the alignment sums overflow long before 1e300 (issue 31: a position
+// of -1e300 made the ATE report positions that "do not determine the transform").
+constexpr double kMaxPositionMetres = 1e9;
+
+void RequirePlausiblePosition(const std::string& path, const TextLine& line,
+                              const Eigen::Vector3d& t) {
+  if (t.allFinite() && t.cwiseAbs().maxCoeff() > kMaxPositionMetres) {
+    ThrowAtLine(path, line.number,
+                fmt::format("position ({}, {}, {}) lies beyond {:g} m; trajectories are in metres",
+                            t.x(), t.y(), t.z(), kMaxPositionMetres));
+  }
+}
+
 // Appends one stamped pose, enforcing the ordering rule of trajectory_io.h.
 void AddStampedPose(const std::string& path, const TextLine& line, double stamp,
                     const Eigen::Vector3d& t, const Eigen::Quaterniond& q, int* previous_line,
@@ -75,6 +89,7 @@ void AddStampedPose(const std::string& path, const TextLine& line, double stamp,
         path, line.number,
         fmt::format("invalid pose (quaternion norm {}, translation finite: {})", n, t.allFinite()));
   }
+  RequirePlausiblePosition(path, line, t);
   if (!out->timestamps.empty()) {
     const double last = out->timestamps.back();
     if (stamp < last) {
@@ -250,6 +265,7 @@ Trajectory ReadKitti(const std::string& path) {
           fmt::format("the 3x3 block is not a rotation (|R^T R - I| = {:.3g}, det = {:.3g})", off,
                       R.determinant()));
     }
+    RequirePlausiblePosition(path, line, m.col(3));
     out.poses.push_back(geometry::SE3::FromMatrix3x4(m));
     out.raw_rotations.push_back(R);
   }

@@ -151,6 +151,15 @@ TEST(TrajectoryIo, BadFilesNameFileAndLine) {
   EXPECT_THAT(ReadError("x", TrajectoryFormat::kTum, "missing/../none.txt"), HasSubstr("none.txt"));
 }
 
+// Issue 31: a position of -1e300 overflowed the alignment, which then blamed the geometry.
+TEST(TrajectoryIo, PositionsBeyondAMillionKilometresAreNamed) {
+  EXPECT_THAT(ReadError("1 0 0 0 0 0 0 1\n2 0 0 -1e300 0 0 0 1\n", TrajectoryFormat::kTum),
+              HasSubstr("bad.txt:2: position (0, 0, -1e+300) lies beyond 1e+09 m"));
+  EXPECT_THAT(ReadError("1 0 0 2e10 0 1 0 0 0 0 1 0\n", TrajectoryFormat::kKitti),
+              HasSubstr("bad.txt:1: position"));
+  EXPECT_EQ(ReadError("1 9e8 0 0 0 0 0 1\n", TrajectoryFormat::kTum), "");
+}
+
 TEST(TrajectoryIo, MissingFileIsAnInputError) {
   EXPECT_THROW(ReadTrajectory("/nonexistent/trajectory.txt"), InputError);
 }

@@ -114,12 +114,25 @@ void OrbSlamSettings::Check(SensorType sensor) const {
     ThrowInput("Camera.bf must be a positive baseline times fx (pixel-metres){}, got {}",
                needs_bf ? "" : " or 0", bf);
   }
+  // The baseline (bf / fx) of a stereo rig or of RGB-D's virtual one lies between a tenth of a
+  // millimetre and a kilometre; outside, bf is a typo (1e-9 made every point "close").
+  if (bf > 0.0 && (Baseline() < kMinBaselineMetres || Baseline() > kMaxBaselineMetres)) {
+    ThrowInput(
+        "Camera.bf = {} gives a baseline of {:g} m (bf / Camera.fx); it must lie in "
+        "[{:g}, {:g}] m",
+        bf, Baseline(), kMinBaselineMetres, kMaxBaselineMetres);
+  }
   if (!std::isfinite(th_depth) || !(th_depth > 0.0)) {
     ThrowInput("ThDepth must be a positive number of baselines, got {}", th_depth);
   }
   if (!std::isfinite(depth_map_factor) || !(depth_map_factor > 0.0)) {
     ThrowInput("DepthMapFactor must be a positive number of raw units per metre, got {}",
                depth_map_factor);
+  }
+  // Depth images count metres (1) to micrometres (1e6) per unit; 1e-30 put a raw 1 at 1e30 m.
+  if (depth_map_factor < kMinDepthMapFactor || depth_map_factor > kMaxDepthMapFactor) {
+    ThrowInput("DepthMapFactor = {} raw units per metre lies outside [{:g}, {:g}] (TUM: 5000)",
+               depth_map_factor, kMinDepthMapFactor, kMaxDepthMapFactor);
   }
   orb.Check();
   if (rectification) {
@@ -184,6 +197,23 @@ OrbSlamSettings LoadOrbSlamSettings(const std::string& path, SensorType sensor) 
     ThrowInFile(path, e.what());
   }
   return s;
+}
+
+void CompleteImageSize(OrbSlamSettings* settings, const std::string& settings_path, int width,
+                       int height, const std::string& frame_path) {
+  if (settings->camera.HasSize()) return;
+  camera::PinholeOptions sized = settings->camera;
+  sized.width = width;
+  sized.height = height;
+  try {
+    camera::CheckPinholeOptions(sized, "Camera.");
+  } catch (const InputError& e) {
+    ThrowInFile(settings_path,
+                fmt::format("{} (the settings give no Camera.width/Camera.height; the size {}x{} "
+                            "is the first frame's, {})",
+                            e.what(), width, height, Excerpt(frame_path, 200)));
+  }
+  settings->camera = sized;
 }
 
 }  // namespace moslam::io

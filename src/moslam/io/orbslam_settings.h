@@ -61,6 +61,12 @@ struct StereoRectification {
   RectificationCamera right;  // RIGHT.*
 };
 
+// Plausibility bounds of OrbSlamSettings::Check (issue 31: absurd values ran silently).
+inline constexpr double kMinBaselineMetres = 1e-4;
+inline constexpr double kMaxBaselineMetres = 1e3;
+inline constexpr double kMinDepthMapFactor = 1e-3;
+inline constexpr double kMaxDepthMapFactor = 1e6;
+
 struct OrbSlamSettings {
   camera::PinholeOptions camera;     // Camera.fx, fy, cx, cy, k1, k2, p1, p2, k3, width, height
   double fps = 30.0;                 // Camera.fps: frames per second (> 0)
@@ -82,5 +88,13 @@ struct OrbSlamSettings {
 
 // Reads and checks `path` for `sensor`. All errors are InputErrors naming the file and the key.
 OrbSlamSettings LoadOrbSlamSettings(const std::string& path, SensorType sensor);
+
+// For settings without Camera.width/Camera.height: sets the image size from the first frame
+// (`size`, read from `frame_path`) and runs the checks that need it (principal point inside the
+// image, focal lengths against the image side, distortion invertible over the image), which
+// LoadOrbSlamSettings could not. Throws InputError naming `settings_path`, the key and the frame.
+// Does nothing when the settings give the size (the run checks every frame against it).
+void CompleteImageSize(OrbSlamSettings* settings, const std::string& settings_path, int width,
+                       int height, const std::string& frame_path);
 
 }  // namespace moslam::io

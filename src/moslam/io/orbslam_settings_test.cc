@@ -219,8 +219,10 @@ TEST(LoadOrbSlamSettings, InvalidValuesNameTheKeyAndFile) {
 TEST(LoadOrbSlamSettings, AbsurdCameraValuesNameTheKeyAndFile) {
   testing::TempDir dir;
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"Camera.fx", "1e-300"}, {"Camera.fx", "1e300"}, {"Camera.fy", "1e300"}, {"Camera.fy", "0.5"},
-      {"Camera.k1", "-1e6"},   {"Camera.k3", "1e300"}, {"Camera.p1", "0.9"},
+      {"Camera.fx", "1e-300"},     {"Camera.fx", "1e300"},    {"Camera.fy", "1e300"},
+      {"Camera.fy", "0.5"},        {"Camera.k1", "-1e6"},     {"Camera.k3", "1e300"},
+      {"Camera.p1", "0.9"},        {"Camera.bf", "1e-9"},     {"Camera.bf", "1e9"},
+      {"DepthMapFactor", "1e-30"}, {"DepthMapFactor", "1e9"},
   };
   for (const auto& [key, value] : cases) {
     const std::string path = dir.Write("s.yaml", SettingsText(With(RgbdKeys(), key, value)));
@@ -234,6 +236,34 @@ TEST(LoadOrbSlamSettings, AbsurdCameraValuesNameTheKeyAndFile) {
     ideal = With(ideal, k, "0.0");
   }
   EXPECT_NO_THROW(LoadOrbSlamSettings(dir.Write("s.yaml", SettingsText(ideal)), SensorType::kRgbD));
+}
+
+// Issue 31: without Camera.width/height the checks that need the size ran nowhere, and k1 = -1e6
+// reached a CHECK in the keypoint grid; the first frame's size completes them.
+TEST(CompleteImageSize, ChecksTheDistortionAgainstTheFirstFramesSize) {
+  testing::TempDir dir;
+  const Keys unsized = Without(Without(RgbdKeys(), "Camera.width"), "Camera.height");
+  const std::string bad = dir.Write("bad.yaml", SettingsText(With(unsized, "Camera.k1", "-1e6")));
+  OrbSlamSettings settings = LoadOrbSlamSettings(bad, SensorType::kRgbD);  // no size: accepted
+  EXPECT_FALSE(settings.camera.HasSize());
+  EXPECT_THAT(
+      ErrorOf([&] { CompleteImageSize(&settings, bad, 640, 480, "rgb/0.png"); }),
+      AllOf(HasSubstr(bad), HasSubstr("Camera.k1"), HasSubstr("640x480"), HasSubstr("rgb/0.png")));
+  // A principal point outside the first frame is named too.
+  const std::string tiny = dir.Write("tiny.yaml", SettingsText(unsized));
+  settings = LoadOrbSlamSettings(tiny, SensorType::kRgbD);
+  EXPECT_THAT(ErrorOf([&] { CompleteImageSize(&settings, tiny, 200, 100, "rgb/0.png"); }),
+              AllOf(HasSubstr(tiny), HasSubstr("Camera.cx")));
+  // Good settings take the size; settings that give one keep it.
+  const std::string good = dir.Write("good.yaml", SettingsText(unsized));
+  settings = LoadOrbSlamSettings(good, SensorType::kRgbD);
+  CompleteImageSize(&settings, good, 640, 480, "rgb/0.png");
+  EXPECT_EQ(settings.camera.width, 640);
+  EXPECT_EQ(settings.camera.height, 480);
+  settings =
+      LoadOrbSlamSettings(dir.Write("sized.yaml", SettingsText(RgbdKeys())), SensorType::kRgbD);
+  CompleteImageSize(&settings, "sized.yaml", 320, 240, "rgb/0.png");
+  EXPECT_EQ(settings.camera.width, 640);
 }
 
 TEST(LoadOrbSlamSettings, NumbersMustBeDecimal) {

@@ -1,6 +1,9 @@
 #include "moslam/util/yaml.h"
 
 #include <cmath>
+#include <fstream>
+#include <limits>
+#include <optional>
 
 #include <opencv2/core.hpp>
 
@@ -44,12 +47,14 @@ bool IsNonDecimalNumber(std::string_view token) {
   return c == 'x' || c == 'X' || (c >= '0' && c <= '9');
 }
 
-// Throws InputError at the first unquoted hexadecimal or octal number, naming the line's key.
-void RejectNonDecimalNumbers(const std::string& path) {
+// Calls `visit(line, key, token)` for every unquoted, uncommented token of the file (split at
+// YAML's punctuation), with the key of the token's line ("" when the line has none).
+template <typename Visit>
+void ForEachPlainToken(const std::string& path, Visit visit) {
   for (const TextLine& line : ReadDataLines(path)) {
     const std::string& text = line.text;
     const size_t colon = text.find(':');
-    std::string key =
+    const std::string key =
         colon == std::string::npos ? std::string() : std::string(Trim(text.substr(0, colon)));
     size_t i = 0;
     while (i < text.size()) {
@@ -67,18 +72,133 @@ void RejectNonDecimalNumbers(const std::string& path) {
         ++i;
         continue;
       }
-      const std::string_view token(text.data() + i, stop - i);
-      if (IsNonDecimalNumber(token)) {
-        ThrowAtLine(
-            path, line.number,
-            fmt::format("{}'{}' is not a decimal number (hexadecimal and octal numbers are "
-                        "not accepted; write it in decimal)",
-                        key.empty() ? std::string() : fmt::format("key '{}': ", Excerpt(key)),
-                        Excerpt(token)));
-      }
+      visit(line, key, std::string_view(text.data() + i, stop - i));
       i = stop;
     }
   }
+}
+
+std::string KeyPrefix(const std::string& key) {
+  return key.empty() ? std::string() : fmt::format("key '{}': ", Excerpt(key));
+}
+
+// Throws InputError at the first unquoted hexadecimal or octal number, naming the line's key.
+void RejectNonDecimalNumbers(const std::string& path) {
+  ForEachPlainToken(
+      path, [&](const TextLine& line, const std::string& key, std::string_view token) {
+        if (!IsNonDecimalNumber(token)) return;
+        ThrowAtLine(path, line.number,
+                    fmt::format("{}'{}' is not a decimal number (hexadecimal and octal numbers are "
+                                "not accepted; write it in decimal)",
+                                KeyPrefix(key), Excerpt(token)));
+      });
+}
+
+// Throws InputError at the first YAML tag other than !!opencv-matrix. Options are numbers,
+// strings, lists and OpenCV matrices; a tag only changes how OpenCV reads a value, and OpenCV
+// 4.6 loops forever on some "!!binary" values (a base64 block whose header names no element
+// type, e.g. "AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA"), so this runs before OpenCV sees the file.
+void RejectTags(const std::string& path) {
+  ForEachPlainToken(
+      path, [&](const TextLine& line, const std::string& key, std::string_view token) {
+        if (token[0] != '!' || token == "!!opencv-matrix") return;
+        ThrowAtLine(path, line.number,
+                    fmt::format("{}the YAML tag '{}' is not supported (only !!opencv-matrix is; "
+                                "write the value as a number, a string or a list)",
+                                KeyPrefix(key), Excerpt(token)));
+      });
+}
+
+// The key and value of a "key: value" or "key:" line, when the line is one.
+struct KeyLine {
+  std::string key;
+  std::string_view value;  // "" for "key:"
+};
+
+std::optional<KeyLine> SplitKeyLine(std::string_view text) {
+  const size_t colon = text.find(": ");
+  if (colon != std::string_view::npos) {
+    return KeyLine{std::string(Trim(text.substr(0, colon))), Trim(text.substr(colon + 2))};
+  }
+  if (text.size() > 1 && text.back() == ':') {
+    return KeyLine{std::string(text.substr(0, text.size() - 1)), {}};
+  }
+  return std::nullopt;
+}
+
+// Whether `value` is one whole quoted string or flow collection: "...", '...', [...], {...}
+// with its brackets balanced (quotes inside a collection are not looked into).
+bool ClosesOnItsLine(std::string_view value) {
+  if (value.size() < 2) return false;
+  const char first = value.front();
+  const char last = value.back();
+  if (first == '"' || first == '\'') return last == first;
+  if (!((first == '[' && last == ']') || (first == '{' && last == '}'))) return false;
+  int depth = 0;
+  for (const char c : value) {
+    depth += (c == '[' || c == '{') - (c == ']' || c == '}');
+    if (depth < 0) return false;
+  }
+  return depth == 0;
+}
+
+// Throws InputError at a key whose block structure OpenCV refuses as "Incorrect indentation" at
+// the line after, away from the key the user has to fix: a "key:" with no block indented below
+// it (YAML's null, or a list at the key's own indentation), and a "key: value" with a plain
+// value and a block indented below it as well (a matrix's value replaced by a number).
+void RejectBadBlocks(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string raw;
+  int number = 0;
+  int open_line = 0;  // the last key line, while its block (or lack of one) is undecided
+  bool needs_block = false;
+  size_t open_indent = 0;
+  std::string open_key;
+  auto next = [&](size_t indent) {
+    if (open_line > 0 && needs_block == (indent <= open_indent)) {
+      ThrowAtLine(path, open_line,
+                  needs_block ? fmt::format("key '{}' has no value (nor a block indented below it)",
+                                            Excerpt(open_key))
+                              : fmt::format("key '{}' has a value and a block indented below it",
+                                            Excerpt(open_key)));
+    }
+    open_line = 0;
+  };
+  while (std::getline(in, raw)) {
+    ++number;
+    const size_t indent = raw.find_first_not_of(" \t\r");
+    if (indent == std::string::npos || raw[indent] == '#' || raw[indent] == '%') continue;
+    const std::string_view text = Trim(std::string_view(raw).substr(indent));
+    next(indent);
+    const std::optional<KeyLine> line = SplitKeyLine(text);
+    // Values in brackets or quotes may go on over several lines (unless they close on this one);
+    // tags open a block.
+    if (!line || line->key.find_first_of("\"'{[") != std::string::npos ||
+        (!ClosesOnItsLine(line->value) &&
+         line->value.find_first_of("\"'{[!|>&*#") != std::string_view::npos)) {
+      continue;
+    }
+    open_line = number;
+    open_indent = indent;
+    open_key = line->key;
+    needs_block = line->value.empty();
+  }
+  next(0);
+}
+
+// OpenCV's parser puts "<file>(<line>): <reason>" into cv::Exception::func and the name of its
+// parsing function into err: the line and the reason are what a user can act on.
+[[noreturn]] void ThrowParseError(const std::string& path, const cv::Exception& e) {
+  const size_t close = e.func.rfind("): ");
+  const size_t open = close == std::string::npos ? close : e.func.rfind('(', close);
+  if (open != std::string::npos) {
+    const std::optional<long long> line = ParseInt(e.func.substr(open + 1, close - open - 1));
+    if (line && *line > 0 && *line <= std::numeric_limits<int>::max()) {
+      ThrowAtLine(path, static_cast<int>(*line),
+                  fmt::format("is not valid YAML: {}", Excerpt(e.func.substr(close + 3))));
+    }
+  }
+  ThrowInFile(path, fmt::format("is not valid YAML: {}", Excerpt(e.err)));
 }
 
 [[noreturn]] void WrongType(const std::string& path, const std::string& key, const char* expected) {
@@ -89,12 +209,14 @@ void RejectNonDecimalNumbers(const std::string& path) {
 
 YamlFile::YamlFile(const std::string& path) : path_(path), impl_(std::make_unique<Impl>()) {
   RequireFile(path, "YAML options file");
+  RejectTags(path);
+  RejectBadBlocks(path);
   // OpenCV's parser reports some malformed input with other exceptions than cv::Exception
   // (std::length_error from a string it sizes from garbage): all of them are bad input here.
   try {
     impl_->storage.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
-    ThrowInFile(path, fmt::format("is not valid YAML: {}", Excerpt(e.err)));
+    ThrowParseError(path, e);
   } catch (const std::exception& e) {
     ThrowInFile(path, fmt::format("is not valid YAML ({})", Excerpt(e.what())));
   }

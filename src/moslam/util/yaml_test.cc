@@ -86,9 +86,35 @@ TEST(YamlFile, MissingOrMalformedFileIsAnInputError) {
   EXPECT_THAT(ErrorOf([&] { YamlFile f(dir.path() + "/none.yaml"); }), HasSubstr("none.yaml"));
   const std::string bad = dir.Write("bad.yaml", "%YAML:1.0\na: [1, 2\nb: {\n");
   EXPECT_THAT(ErrorOf([&] { YamlFile f(bad); }), HasSubstr("bad.yaml"));
+  // Issue 31: a key without a value is named at its line (OpenCV stops at the next one), and
+  // other parse errors at the line OpenCV's parser gives, with its reason.
+  const std::string empty_value = dir.Write("e.yaml", "%YAML:1.0\na: 1\nb: \nc: 3\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(empty_value); }),
+              HasSubstr(empty_value + ":3: key 'b' has no value"));
+  const std::string last = dir.Write("last.yaml", "%YAML:1.0\na: 1\nb:\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(last); }), HasSubstr(last + ":3: key 'b' has no value"));
+  const std::string indent = dir.Write("i.yaml", "%YAML:1.0\na: 1\n  b: 2\nc: 3\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(indent); }), HasSubstr(indent + ":"));
+  const std::string both =
+      dir.Write("m.yaml", "%YAML:1.0\nD: 0.5\n   rows: 1\n   cols: 1\n   data: [1.0]\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(both); }),
+              HasSubstr(both + ":2: key 'D' has a value and a block indented below it"));
+  for (const char* value : {"\"12\"", "[1, 2]", "{a: 1}"}) {
+    const std::string quoted =
+        dir.Write("q.yaml", fmt::format("%YAML:1.0\nD: {}\n   rows: 1\n   data: [1.0]\n", value));
+    EXPECT_THAT(ErrorOf([&] { YamlFile f(quoted); }),
+                HasSubstr(quoted + ":2: key 'D' has a value and a block"))
+        << value;
+  }
+  // A key may open a block indented below it: a map or a list; a list may go on over lines.
+  const std::string blocks =
+      dir.Write("b.yaml", "%YAML:1.0\nm:\n  x: 1\nn:\n   - 3\nl: [1,\n     2]\n");
+  YamlFile f(blocks);
+  EXPECT_EQ(f.Required<int>("m.x"), 1);
+  EXPECT_EQ(f.Required<std::vector<double>>("l"), (std::vector<double>{1, 2}));
+  EXPECT_EQ(f.Required<std::vector<double>>("n"), (std::vector<double>{3}));
 }
 
-// Issue 31: OpenCV reads "0x217" as 535 and "017" as 15; an options file never means them.
 TEST(YamlFile, HexadecimalAndOctalNumbersAreRefusedNamingKeyAndLine) {
   testing::TempDir dir;
   const std::string hex = dir.Write("hex.yaml", "%YAML:1.0\na: 1\nCamera.fx: 0x217\n");
@@ -108,6 +134,28 @@ TEST(YamlFile, HexadecimalAndOctalNumbersAreRefusedNamingKeyAndLine) {
   EXPECT_DOUBLE_EQ(f.Required<double>("c"), -0.25e-3);
   EXPECT_EQ(f.Required<std::string>("d"), "0x1f");
   EXPECT_EQ(f.Required<std::string>("e"), "017");
+}
+
+// Issue 31: OpenCV 4.6 loops forever on a "!!binary" block whose header names no element type;
+// tags are refused before OpenCV parses the file, naming the line. (Without the fix this test
+// hangs rather than fails, which ctest's timeout reports.)
+TEST(YamlFile, YamlTagsOtherThanOpenCvMatrixAreRefusedBeforeParsing) {
+  testing::TempDir dir;
+  const std::string hang = dir.Write(
+      "hang.yaml", "%YAML:1.0\na: 1\nx: !!binary |\n   AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(hang); }),
+              AllOf(HasSubstr(hang + ":3:"), HasSubstr("key 'x'"), HasSubstr("!!binary")));
+  const std::string str = dir.Write("str.yaml", "%YAML:1.0\nlist: [1, !!str 2]\n");
+  EXPECT_THAT(ErrorOf([&] { YamlFile f(str); }), AllOf(HasSubstr(str + ":2:"), HasSubstr("!!str")));
+  // Matrices keep their tag; a '!' inside text or a comment is no tag.
+  const std::string fine = dir.Write("fine.yaml",
+                                     "%YAML:1.0\nm: !!opencv-matrix\n   rows: 1\n   cols: 1\n"
+                                     "   dt: d\n   data: [2.0]\nname: \"!!binary\"\n"
+                                     "b: hi!\n# !!binary in a comment\n");
+  YamlFile f(fine);
+  EXPECT_EQ(f.Required<std::vector<double>>("m"), std::vector<double>{2.0});
+  EXPECT_EQ(f.Required<std::string>("name"), "!!binary");
+  EXPECT_EQ(f.Required<std::string>("b"), "hi!");
 }
 
 TEST(YamlFile, AListAtTheTopOrADirectoryIsNamed) {
