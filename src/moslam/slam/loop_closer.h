@@ -74,8 +74,8 @@ struct LoopCloserStats {
   int loops_closed = 0;
   int loops_rejected = 0;  // found (ORB-SLAM2's tests passed) but refused by the verification
   int global_ba_merged = 0;
-  int global_ba_dropped = 0;                         // stale (another correction meanwhile)
-  std::vector<std::pair<uint64_t, uint64_t>> loops;  // (current, loop) keyframe ids
+  int global_ba_dropped = 0;                          // stale (another correction meanwhile)
+  std::vector<std::pair<uint64_t, uint64_t>> loops;   // (current, loop) keyframe ids
   std::vector<std::pair<double, double>> loop_times;  // their timestamps (s), as `loops`
 };
 

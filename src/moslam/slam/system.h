@@ -159,12 +159,12 @@ struct MapSummary {
   int resets = 0;  // monocular: initial maps rejected after bundle adjustment (ORB-SLAM2 resets)
   int map_points = 0;
   int lost_frames = 0;
-  int relocalizations = 0;         // frames relocalized (FrameReport::relocalized)
-  int recoveries = 0;              // frames recovered after a short loss (FrameReport::recovered)
-  int movable_points_erased = 0;   // FrameReport::movable_points_erased, summed
-  int loops_closed = 0;            // loop corrections (LoopCloserStats)
-  int loops_rejected = 0;          // loops found but refused by the verification
-  int global_ba_merged = 0;        // full bundle adjustments after a loop, written back
+  int relocalizations = 0;        // frames relocalized (FrameReport::relocalized)
+  int recoveries = 0;             // frames recovered after a short loss (FrameReport::recovered)
+  int movable_points_erased = 0;  // FrameReport::movable_points_erased, summed
+  int loops_closed = 0;           // loop corrections (LoopCloserStats)
+  int loops_rejected = 0;         // loops found but refused by the verification
+  int global_ba_merged = 0;       // full bundle adjustments after a loop, written back
   // Per closed loop: the timestamps (s) of the current and the loop keyframe, so that a run's
   // summary tells a true loop (a return to an earlier place) from a false one.
   std::vector<std::pair<double, double>> loop_times;
