@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 
 from helpers import Spec, clone, damaged_line_names, file_named, read_lines, write_lines
-from mutate import byte_mutations, line_mutations, read_bytes, replace_file
+from mutate import byte_mutations, line_mutations, read_bytes, replace_file, substitute_path
 
 def info_args(fmt, root, settings=None, extra=()):
     args = ["dataset", "info", root, "--format", fmt, "--check-images"] + list(extra)
@@ -72,11 +72,7 @@ def image_specs(rng, reader, fmt, base, rel_image, depth=False, settings=None, r
         def build(d, data=data, use_run=False):
             root = clone(base, os.path.join(d, "seq"))
             path = os.path.join(root, rel_image)
-            os.unlink(path)
-            if data == "dir":
-                os.makedirs(path)
-            elif data is not None:
-                replace_file(path, data)
+            substitute_path(path, data)
             s = os.path.join(root, "settings.yaml") if settings else None
             args = run_args(fmt, root, s, d) if use_run else info_args(fmt, root)
             return args, [file_named(path)]

@@ -11,7 +11,7 @@ import numpy as np
 from cases_datasets import image_variants, run_args
 from helpers import (Spec, clone, damaged_line_names, file_named, line_or_key, read_lines,
                      write_lines)
-from mutate import byte_mutations, line_mutations, read_bytes, replace_file
+from mutate import byte_mutations, line_mutations, read_bytes, replace_file, substitute_path
 
 CARD_VALUES = ["abc", "-1", "0", "1e9", "nan", "[1, 2]", "", "\"x\"", "{a: 1}", "1e-300"]
 
@@ -26,11 +26,7 @@ def mask_specs(rng, inputs):
         def build(d, data=data):
             m = clone(masks, os.path.join(d, "masks"))
             path = os.path.join(m, name)
-            os.unlink(path)
-            if data == "dir":
-                os.makedirs(path)
-            elif data is not None:
-                replace_file(path, data)
+            substitute_path(path, data)
             s = os.path.join(tum, "settings.yaml")
             return run_args("tum", tum, s, d, ["--mask-source", "files", m]), [file_named(path)]
         specs.append(Spec("masks", f"run_{variant}", build, cost=3))

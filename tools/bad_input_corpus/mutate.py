@@ -22,6 +22,16 @@ def replace_file(path, data):
         f.write(data)
 
 
+def substitute_path(path, data):
+    """Replaces the file at `path`: by `data` (str or bytes), by a directory ("dir"), or by
+    nothing (None: the file is gone)."""
+    os.unlink(path)
+    if data == "dir":
+        os.makedirs(path)
+    elif data is not None:
+        replace_file(path, data)
+
+
 def read_bytes(path):
     with open(path, "rb") as f:
         return f.read()

@@ -12,15 +12,20 @@
 namespace moslam::slam {
 namespace {
 
-TEST(SystemSynthetic, RgbdWithMovingMasksTracksEveryFrameAndBeatsUnmasked) {
-  const testing::TempDir dir;
+// The first `frames` frames of a generator preset into `dir`.
+void Generate(const std::string& preset, uint64_t seed, int frames, const testing::TempDir& dir) {
   synth::GeneratorOptions generator;
-  generator.preset = "w_xyz";
-  generator.seed = 3;
+  generator.preset = preset;
+  generator.seed = seed;
   generator.out = dir.path();
-  generator.frames = 60;  // 2 s, ~0.1 m of camera motion
+  generator.frames = frames;
   generator.progress = false;
   synth::GenerateSequence(generator);
+}
+
+TEST(SystemSynthetic, RgbdWithMovingMasksTracksEveryFrameAndBeatsUnmasked) {
+  const testing::TempDir dir;
+  Generate("w_xyz", 3, 60, dir);  // 2 s, ~0.1 m of camera motion
   const DatasetRun run = RunDataset(dir.path(), dir.path() + "/settings.yaml",
                                     /*deterministic=*/true, 0, "moving");
   ASSERT_EQ(run.reports.size(), 60u);
@@ -51,13 +56,7 @@ TEST(SystemSynthetic, DegradedMasksStayWithinTwiceTheExactMasksError) {
       "three deterministic 90-frame runs; the unit tests of each "
       "mechanism run under the sanitizers");
   const testing::TempDir dir;
-  synth::GeneratorOptions generator;
-  generator.preset = "w_xyz";
-  generator.seed = 4;
-  generator.out = dir.path();
-  generator.frames = 90;
-  generator.progress = false;
-  synth::GenerateSequence(generator);
+  Generate("w_xyz", 4, 90, dir);
   const auto damage = [](size_t frame, const cv::Mat& mask) -> cv::Mat {
     if (frame % 3 == 2) return cv::Mat::zeros(mask.size(), CV_8UC1);
     cv::Mat out;
@@ -102,13 +101,7 @@ TEST(SystemSynthetic, DegradedMasksStayWithinTwiceTheExactMasksError) {
 TEST(SystemSynthetic, AliasedFacadesAtTheEndOfACornerDoNotMoveTheCamera) {
   MOSLAM_SKIP_UNDER_SANITIZER("two deterministic 240-frame stereo runs of 1226 x 370 images");
   const testing::TempDir dir;
-  synth::GeneratorOptions generator;
-  generator.preset = "street_repeat_loop";
-  generator.seed = 3;
-  generator.out = dir.path();
-  generator.frames = 240;
-  generator.progress = false;
-  synth::GenerateSequence(generator);
+  Generate("street_repeat_loop", 3, 240, dir);
   const std::string settings = dir.path() + "/settings.yaml";
   const DatasetRun checked = RunDataset(dir.path(), settings, true, 0, "");
   const DatasetRun unchecked = RunDataset(dir.path(), settings, true, 0, "",
