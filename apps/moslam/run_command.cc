@@ -5,6 +5,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <spdlog/spdlog.h>
@@ -65,8 +66,13 @@ struct RunArgs {
   int mask_margin = slam::SystemOptions{}.mask_margin_px;
   int mask_propagation = slam::SystemOptions{}.mask_propagation_frames;
   int mask_completion = slam::SystemOptions{}.mask_completion_px;
+  int mask_work_scale = slam::SystemOptions{}.mask_work_scale;
   int segment_every = 1;
   std::string mask_damage;
+  // Maps that last (issue 27, docs/MAP_FORMAT.md).
+  std::string save_map;
+  std::string load_map;
+  bool localization = false;
 };
 
 // The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
@@ -92,19 +98,46 @@ std::string ResolveVocabulary(const std::string& arg) {
 }
 
 #if MOSLAM_HAVE_SLAM
-// slam::System behind the runner's interface.
+// slam::System behind the runner's interface; the map is saved when the run finishes (--save-map).
 class SystemTracker : public runner::Tracker {
  public:
-  explicit SystemTracker(const slam::SystemOptions& options) : system_(options) {}
+  SystemTracker(const slam::SystemOptions& options, std::string save_map)
+      : system_(options), save_map_(std::move(save_map)) {}
   slam::FrameReport Track(const slam::FrameInput& input) override { return system_.Track(input); }
-  void Finish() override { system_.Finish(); }
+  void Finish() override {
+    system_.Finish();
+    if (!save_map_.empty()) system_.SaveMap(save_map_);
+  }
   eval::Trajectory CameraTrajectory() const override { return system_.CameraTrajectory(); }
   eval::Trajectory KeyFrameTrajectory() const override { return system_.KeyFrameTrajectory(); }
   slam::MapSummary Summary() const override { return system_.Summary(); }
 
  private:
   slam::System system_;
+  std::string save_map_;
 };
+
+// --save-map / --load-map / --localization, checked before any frame is read.
+void SetMapOptions(const RunArgs& args, slam::SystemOptions* options) {
+  if (args.localization && args.load_map.empty()) {
+    ThrowInput("--localization: needs --load-map FILE (the map to localize in)");
+  }
+  if (!args.save_map.empty()) {
+    const auto folder = std::filesystem::path(args.save_map).parent_path();
+    if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+      ThrowInput("--save-map {}: no folder {}", args.save_map, folder.string());
+    }
+    if (std::filesystem::is_directory(args.save_map)) {
+      ThrowInput("--save-map {}: is a directory", args.save_map);
+    }
+  }
+  if (options->vocabulary_path.empty() && !args.load_map.empty()) {
+    ThrowInput("--load-map {}: needs a vocabulary to relocalize in the map (--vocabulary)",
+               args.load_map);
+  }
+  options->load_map = args.load_map;
+  options->localization = args.localization;
+}
 #endif
 
 std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings,
@@ -131,8 +164,10 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.mask_margin_px = args.mask_margin;
   options.mask_propagation_frames = args.mask_propagation;
   options.mask_completion_px = args.mask_completion;
+  options.mask_work_scale = args.mask_work_scale;
+  SetMapOptions(args, &options);
   options.Check();
-  return std::make_unique<SystemTracker>(options);
+  return std::make_unique<SystemTracker>(options, args.save_map);
 #else
   (void)settings;
   (void)sensor;
@@ -382,6 +417,12 @@ void AddRunCommand(CLI::App& app) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command
+      ->add_option("--mask-work-scale", args->mask_work_scale,
+                   "Carry and grow masks on images downsampled by this factor (1: full size; "
+                   "the network's pixels stay exact)")
+      ->check(CLI::Range(1, 4))
+      ->capture_default_str();
+  command
       ->add_option("--segment-every", args->segment_every,
                    "Run the mask source on every K-th frame only; the others get the carried "
                    "mask (needs --mask-propagation > 0)")
@@ -397,6 +438,15 @@ void AddRunCommand(CLI::App& app) {
                    "as ORB-SLAM2; no effect with --deterministic)")
       ->check(CLI::Range(0, 19))
       ->capture_default_str();
+  command->add_option("--save-map", args->save_map,
+                      "Write the whole map to FILE when the run ends (docs/MAP_FORMAT.md; written "
+                      "to FILE.tmp, then renamed)");
+  command->add_option("--load-map", args->load_map,
+                      "Start from a map saved by --save-map: the first frames are relocalized in "
+                      "it, then tracking and mapping continue (same settings and vocabulary)");
+  command->add_flag("--localization", args->localization,
+                    "With --load-map: track and relocalize in the loaded map without changing "
+                    "it (no new keyframes or points, no loop closing)");
   command->callback([args] {
     if (args->quiet) spdlog::set_level(std::max(spdlog::get_level(), spdlog::level::warn));
     Run(*args);

@@ -94,6 +94,20 @@ def make_estimate(gt, out, seed):
         f.write("\n".join(rows) + "\n")
 
 
+def make_map(moslam, tum, vocabulary, out_dir):
+    """A map file (`moslam run --save-map`) of the TUM sequence, with the small vocabulary."""
+    path = os.path.join(out_dir, "w_xyz.map")
+    if os.path.isfile(path):
+        return path
+    os.makedirs(out_dir, exist_ok=True)
+    subprocess.run([moslam, "run", "--dataset", "tum", tum, "--settings",
+                    os.path.join(tum, "settings.yaml"), "--vocabulary", vocabulary,
+                    "--deterministic", "--quiet", "--out", os.path.join(out_dir, "run"),
+                    "--save-map", path], check=True, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, env=dict(os.environ, OMP_WAIT_POLICY="passive"))
+    return path
+
+
 def make_base_inputs(moslam, base):
     """Paths of the base inputs (a dict); made once per work folder and reused. The marker file
     is written last, so that inputs an interrupted run left half made are made again."""
@@ -111,12 +125,13 @@ def make_base_inputs(moslam, base):
     vocab_text, vocab_binary = make_vocabulary(moslam, os.path.join(base, "vocab"))
     estimate = os.path.join(base, "estimate.txt")
     make_estimate(os.path.join(tum, "groundtruth.txt"), estimate, 3)
+    map_file = make_map(moslam, tum, vocab_binary, os.path.join(base, "map"))
     open(marker, "w").close()
     shared = os.environ.get("MOSLAM_SHARED", os.path.join(os.path.dirname(REPO), "shared"))
     return {
         "repo": REPO, "base": base, "tum": tum, "kitti": kitti,
         "euroc": os.path.join(base, "euroc"), "folder": os.path.join(base, "folder"),
         "masks": os.path.join(base, "masks"), "vocab_text": vocab_text,
-        "vocab_binary": vocab_binary, "estimate": estimate,
+        "vocab_binary": vocab_binary, "estimate": estimate, "map": map_file,
         "shared": shared if os.path.isdir(os.path.join(shared, "models")) else None,
     }

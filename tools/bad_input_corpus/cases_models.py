@@ -1,6 +1,6 @@
 """Mask folders (`moslam run --mask-source files`, `moslam features --mask`), model cards and
 model files (`moslam segment`), vocabularies (`moslam vocab info|convert`, `moslam run
---vocabulary`) and CRF inputs (`moslam crf`)."""
+--vocabulary`), CRF inputs (`moslam crf`) and map files (`moslam run --load-map`)."""
 
 import os
 import random
@@ -238,7 +238,50 @@ def crf_specs(rng, inputs):
     return specs
 
 
+def map_specs(rng, inputs):
+    """Map files of `moslam run --load-map` (docs/MAP_FORMAT.md): damaged bytes, cuts in the
+    header and the body, a directory, an absent file; and the map made with another vocabulary."""
+    tum, original = inputs["tum"], inputs["map"]
+    settings = os.path.join(tum, "settings.yaml")
+
+    def load(d, path, vocabulary=inputs["vocab_binary"], extra=()):
+        return run_args("tum", tum, settings, d,
+                        ["--vocabulary", vocabulary, "--load-map", path] + list(extra))
+
+    data = read_bytes(original)
+    mutations = byte_mutations(rng, data)
+    mutations += [(f"cut_{n}", data[:n]) for n in (8, 12, 23, 24, 40, len(data) - 1)]
+    specs = []
+    for name, mutated in mutations:
+        def build(d, mutated=mutated, name=name):
+            path = os.path.join(d, "w_xyz.map")
+            replace_file(path, mutated)
+            return load(d, path, extra=["--localization"] if "flip" in name else []), \
+                [file_named(path)]
+        specs.append(Spec("map", f"load_{name}", build, cost=3))
+
+    def other_vocabulary(d):
+        # The shipped vocabulary is another tree than the one the map was made with.
+        path = clone(original, os.path.join(d, "w_xyz.map"))
+        shipped = os.path.join(inputs["repo"], "data", "vocab", "moslam_orb.mvoc")
+        return load(d, path, vocabulary=shipped), [file_named(path)]
+
+    def directory(d):
+        return load(d, d), [file_named(d)]
+
+    def absent(d):
+        path = os.path.join(d, "none.map")
+        return load(d, path), [[path]]
+
+    def valid(d):
+        return load(d, clone(original, os.path.join(d, "w_xyz.map")), extra=["--localization"]), []
+    specs += [Spec("map", "other_vocabulary", other_vocabulary, cost=3),
+              Spec("map", "directory", directory, cost=3), Spec("map", "absent", absent, cost=3),
+              Spec("map", "valid", valid, cost=3, valid=True)]
+    return specs
+
+
 def specs(inputs, seed):
     rng = random.Random(seed + 3)
     return (mask_specs(rng, inputs) + card_specs(rng, inputs) + model_specs(rng, inputs) +
-            vocab_specs(rng, inputs) + crf_specs(rng, inputs))
+            vocab_specs(rng, inputs) + crf_specs(rng, inputs) + map_specs(rng, inputs))

@@ -1,6 +1,7 @@
 #include "moslam/feature/matcher.h"
 
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -44,6 +45,27 @@ TEST(MatcherTest, DescriptorDistanceCountsBits) {
   EXPECT_EQ(DescriptorDistance(a, b), 11);
   for (uint8_t& x : a) x = 0xFF;
   EXPECT_EQ(DescriptorDistance(a, b), 256 - 11);
+}
+
+// The parallel bit count against counting bit by bit, on words with every bit count (0..64 set
+// bits at random places) and on random words.
+TEST(MatcherTest, PopCountMatchesCountingBitByBit) {
+  std::mt19937_64 rng(7);
+  const auto slow = [](uint64_t v) {
+    int n = 0;
+    for (int i = 0; i < 64; ++i) n += static_cast<int>((v >> i) & 1u);
+    return n;
+  };
+  for (int bits = 0; bits <= 64; ++bits) {
+    uint64_t v = 0;
+    while (slow(v) < bits) v |= uint64_t{1} << (rng() % 64);
+    EXPECT_EQ(PopCount64(v), bits) << std::hex << v;
+  }
+  for (int i = 0; i < 10000; ++i) {
+    const uint64_t v = rng();
+    ASSERT_EQ(PopCount64(v), slow(v)) << std::hex << v;
+  }
+  EXPECT_EQ(PopCount64(~uint64_t{0}), 64);
 }
 
 TEST(MatcherTest, RotationHistogramKeepsDominantBins) {

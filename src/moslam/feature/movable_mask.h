@@ -34,8 +34,30 @@ std::vector<uint8_t> KeypointsNearMask(const std::vector<cv::KeyPoint>& keypoint
 // rectified cameras this is used with have none; TUM's small distortion moves a pixel by < 2 px).
 // With an empty `depth`, every pixel is carried by the rotation (the infinite homography
 // K R K^-1): right for far objects, and all a camera without dense depth can do.
+// `source`, when not empty, is where `values` may be non-zero (the caller knows it, e.g. from
+// the last frame): only it is read. `written`, when given, receives the bounding box of the
+// pixels the warp wrote (empty when none), so that the caller can work on that part alone.
 cv::Mat WarpMask(const cv::Mat& values, const cv::Mat& depth, const camera::PinholeCamera& camera,
-                 const geometry::SE3& T_to_from);
+                 const geometry::SE3& T_to_from, const cv::Rect& source = cv::Rect(),
+                 cv::Rect* written = nullptr);
+
+// The mask work at a coarser scale (SystemOptions::mask_work_scale): propagation, structure
+// planes and completion cost in proportion to the pixels they touch, and a mask carried or grown
+// at half resolution is as good for keeping keypoints off a body (ORB keypoints need a 31 px
+// patch; masks keep a 4 px margin) at a quarter of the cost. `factor` >= 1; 1 returns the input.
+//
+// The mask with one pixel per factor x factor block, non-zero (255) where any pixel of the block
+// is non-zero: a body's thin parts are never lost.
+cv::Mat DownsampleMask(const cv::Mat& mask, int factor);
+// The depth (CV_32FC1) at every factor-th pixel of every factor-th row (no averaging across a
+// body's edge, which would make depths that lie on neither side).
+cv::Mat DownsampleDepth(const cv::Mat& depth, int factor);
+// The ideal pinhole camera of images downsampled that way: pixel (x, y) of the small image is
+// pixel (factor x, factor y) of the full one.
+camera::PinholeCamera DownsampledCamera(const camera::PinholeCamera& camera, int factor);
+// A mask downsampled by `factor` brought back to `size` (each pixel repeated factor x factor
+// times; `small` must have the size DownsampleMask gives for `size`).
+cv::Mat UpsampleMask(const cv::Mat& small, int factor, const cv::Size& size);
 
 struct MaskCompletionOptions {
   // Farthest a mask grows from where it was, in pixels (4-connected steps); 0 = off. Far enough

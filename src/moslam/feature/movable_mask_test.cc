@@ -113,5 +113,46 @@ TEST(CompleteMaskByDepth, GrowsOverTheBodyAndStopsAtTheDepthEdge) {
   EXPECT_THROW(CompleteMaskByDepth(partial, view.depth, options), InputError);
 }
 
+// Pooling keeps every masked pixel's block, at even and odd sizes; bringing it back covers the
+// input, and only the blocks it touched.
+TEST(MaskScale, DownsampleKeepsAnyMaskedPixelAndUpsampleCoversIt) {
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(641, 479)}) {
+    for (const int factor : {2, 3}) {
+      cv::Mat mask = cv::Mat::zeros(size, CV_8UC1);
+      mask.at<uint8_t>(7, 9) = 1;  // one pixel, any non-zero value
+      mask(cv::Rect(100, 50, 33, 21)).setTo(255);
+      mask.at<uint8_t>(size.height - 1, size.width - 1) = 255;  // the last, partial block
+      const cv::Mat small = DownsampleMask(mask, factor);
+      ASSERT_EQ(small.cols, (size.width + factor - 1) / factor);
+      ASSERT_EQ(small.rows, (size.height + factor - 1) / factor);
+      EXPECT_EQ(small.at<uint8_t>(7 / factor, 9 / factor), 255);
+      const cv::Mat back = UpsampleMask(small, factor, size);
+      ASSERT_EQ(back.size(), size);
+      EXPECT_EQ(cv::countNonZero(mask & ~back), 0) << size << " x" << factor;
+      // Each masked block adds at most factor^2 pixels: the single pixel's block and the box's
+      // edge blocks, nothing far away.
+      const cv::Rect box = cv::boundingRect(back(cv::Rect(50, 30, 200, 100)));
+      EXPECT_GE(box.x + 50, 100 - factor);
+      EXPECT_LE(box.x + 50 + box.width, 133 + factor);
+    }
+  }
+  EXPECT_TRUE(DownsampleMask(cv::Mat(), 2).empty());
+}
+
+TEST(MaskScale, DepthIsSampledAndTheCameraProjectsAtTheSmallScale) {
+  cv::Mat depth(480, 640, CV_32FC1);
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 640; ++u) depth.at<float>(v, u) = static_cast<float>(u + 1000 * v);
+  }
+  const cv::Mat small = DownsampleDepth(depth, 2);
+  ASSERT_EQ(small.size(), cv::Size(320, 240));
+  EXPECT_EQ(small.at<float>(10, 20), depth.at<float>(20, 40));  // no averaging
+  const camera::PinholeCamera full = Camera(), half = DownsampledCamera(full, 2);
+  const Eigen::Vector3d p(0.3, -0.2, 2.5);
+  const Eigen::Vector2d a = *full.ProjectPinhole(p), b = *half.ProjectPinhole(p);
+  EXPECT_NEAR(b.x(), a.x() / 2.0, 1e-9);
+  EXPECT_NEAR(b.y(), a.y() / 2.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace moslam::feature

@@ -27,7 +27,7 @@ namespace moslam::feature {
 struct StructurePlaneOptions {
   // Sampling step of the depth grid, pixels (8: 4800 samples at 640x480).
   int grid_px = 8;
-  // Most planes tried (each removes its part's samples before the next).
+  // Most planes tried (each removes its part's samples before the next), at most 8.
   int max_planes = 6;
   // RANSAC hypotheses per plane ...
   int iterations = 150;
@@ -77,6 +77,7 @@ class StructurePlanes {
   camera::PinholeCamera camera_;
   StructurePlaneOptions options_;
   std::vector<Plane> planes_;
+  cv::Mat cell_planes_;  // CV_8UC1 grid: bit k set where plane k's part lies
 };
 
 }  // namespace moslam::feature

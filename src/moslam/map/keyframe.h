@@ -63,6 +63,10 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::shared_ptr<KeyFrame> parent() const { return parent_.lock(); }
   const std::set<uint64_t>& children() const { return children_; }
   void SetParent(const std::shared_ptr<KeyFrame>& parent);
+  // True until UpdateConnections has chosen a parent (the first keyframe keeps it); saved with
+  // the map so that a restored keyframe chooses its parent the same way.
+  bool first_connection() const { return first_connection_; }
+  void RestoreFirstConnection(bool first) { first_connection_ = first; }
 
   // --- erasure ---
   bool bad() const { return bad_; }

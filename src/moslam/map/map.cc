@@ -1,6 +1,9 @@
 #include "moslam/map/map.h"
 
+#include <algorithm>
 #include <utility>
+
+#include "moslam/util/check.h"
 
 namespace moslam::map {
 
@@ -57,6 +60,31 @@ void Map::Replace(const std::shared_ptr<MapPoint>& old_point,
   old_point->replaced_by = new_point;
   old_point->bad = true;
   points_.erase(old_point->id);
+}
+
+std::shared_ptr<KeyFrame> Map::RestoreKeyFrame(uint64_t id, feature::Frame frame,
+                                               const geometry::SE3& T_cam_world) {
+  MOSLAM_CHECK(keyframes_.count(id) == 0) << "keyframe " << id << " restored twice";
+  auto kf = std::make_shared<KeyFrame>(id, std::move(frame), T_cam_world);
+  keyframes_[id] = kf;
+  next_keyframe_id_ = std::max(next_keyframe_id_, id + 1);
+  return kf;
+}
+
+std::shared_ptr<MapPoint> Map::RestoreMapPoint(uint64_t id, const Eigen::Vector3d& position,
+                                               const std::shared_ptr<KeyFrame>& reference,
+                                               uint64_t first_keyframe_id) {
+  MOSLAM_CHECK(points_.count(id) == 0) << "map point " << id << " restored twice";
+  auto p = std::make_shared<MapPoint>(id, position, reference, first_keyframe_id);
+  points_[id] = p;
+  next_point_id_ = std::max(next_point_id_, id + 1);
+  return p;
+}
+
+void Map::RestoreCounters(uint64_t next_keyframe_id, uint64_t next_point_id, uint64_t generation) {
+  next_keyframe_id_ = std::max(next_keyframe_id_, next_keyframe_id);
+  next_point_id_ = std::max(next_point_id_, next_point_id);
+  generation_ = generation;
 }
 
 std::shared_ptr<KeyFrame> Map::keyframe(uint64_t id) const {

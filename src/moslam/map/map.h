@@ -24,6 +24,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -57,6 +58,27 @@ class Map {
   void Replace(const std::shared_ptr<MapPoint>& old_point,
                const std::shared_ptr<MapPoint>& new_point);
 
+  // Loop edges (ORB-SLAM2's KeyFrame::mspLoopEdges): both directions of each closed loop's
+  // (current, loop) keyframe pair. Kept in the map rather than in loop closing so that a saved map
+  // carries them (mapio/map_file.h) and the essential graph of a later loop still holds them.
+  const std::set<std::pair<uint64_t, uint64_t>>& loop_edges() const { return loop_edges_; }
+  void AddLoopEdge(uint64_t a, uint64_t b) {
+    loop_edges_.insert({a, b});
+    loop_edges_.insert({b, a});
+  }
+
+  // --- restoring a saved map (mapio/map_file.h) ---
+  // A keyframe / point with the id it was saved with; the id must be unused (CHECK), and the
+  // next ids continue after the largest one restored.
+  std::shared_ptr<KeyFrame> RestoreKeyFrame(uint64_t id, feature::Frame frame,
+                                            const geometry::SE3& T_cam_world);
+  std::shared_ptr<MapPoint> RestoreMapPoint(uint64_t id, const Eigen::Vector3d& position,
+                                            const std::shared_ptr<KeyFrame>& reference,
+                                            uint64_t first_keyframe_id);
+  // The id counters and generation as saved (each at least what the restored entities need).
+  void RestoreCounters(uint64_t next_keyframe_id, uint64_t next_point_id, uint64_t generation);
+  uint64_t next_point_id() const { return next_point_id_; }
+
   const std::map<uint64_t, std::shared_ptr<KeyFrame>>& keyframes() const { return keyframes_; }
   const std::map<uint64_t, std::shared_ptr<MapPoint>>& points() const { return points_; }
   std::shared_ptr<KeyFrame> keyframe(uint64_t id) const;
@@ -76,6 +98,7 @@ class Map {
   uint64_t next_keyframe_id_ = 0;
   uint64_t next_point_id_ = 0;
   uint64_t generation_ = 0;
+  std::set<std::pair<uint64_t, uint64_t>> loop_edges_;
   std::function<void(const KeyFrame&)> erase_listener_;
 };
 

@@ -110,9 +110,8 @@ bool LoopCloser::ProcessKeyFrame(const KeyFramePtr& keyframe) {
       ++stats_.candidates_consistent;
     }
     if (!ComputeSim3(keyframe, consistent, &loop)) return false;
-    correction = CorrectLoop(map_, loop, loop_edges_, camera_, options_.fix_scale);
-    loop_edges_.insert({keyframe->id, loop.loop->id});
-    loop_edges_.insert({loop.loop->id, keyframe->id});
+    correction = CorrectLoop(map_, loop, map_->loop_edges(), camera_, options_.fix_scale);
+    map_->AddLoopEdge(keyframe->id, loop.loop->id);
     last_loop_keyframe_ = keyframe->id;
   }
   spdlog::info(

@@ -114,7 +114,6 @@ class LoopCloser {
   };
   std::vector<ConsistentGroup> groups_;
   uint64_t last_loop_keyframe_ = 0;
-  std::set<std::pair<uint64_t, uint64_t>> loop_edges_;
   std::thread gba_thread_;
   mutable std::mutex stats_mutex_;
   LoopCloserStats stats_;

@@ -48,9 +48,13 @@ class MaskPropagator {
   void Reset();
 
  private:
+  // Ages one frame older, faded and grown, from `carried` into `ages` (views of one region).
+  void CarryInto(const cv::Mat& carried, cv::Mat ages) const;
+
   camera::PinholeCamera camera_;
   MaskPropagationOptions options_;
   cv::Mat last_ages_, last_depth_;  // last committed frame (empty: none)
+  cv::Rect last_bounds_;            // where last_ages_ is non-zero (empty: nowhere)
   cv::Mat pending_ages_;            // the frame MaskFor was last called for
 };
 

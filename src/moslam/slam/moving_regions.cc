@@ -47,19 +47,25 @@ void DrawRegion(const std::vector<InconsistentKeypoint>& keypoints, const std::v
   std::vector<cv::Point> hull;
   cv::convexHull(points, hull);
   cv::fillConvexPoly(region, hull, cv::Scalar(255));
+  // Everything drawn lies within the points' box grown by the disc radius: only that part of
+  // the image is visited (the whole image per cluster was 80 % of the cost).
+  const cv::Rect box = (cv::boundingRect(points) + cv::Point(-o.radius_px - 1, -o.radius_px - 1) +
+                        cv::Size(2 * o.radius_px + 3, 2 * o.radius_px + 3)) &
+                       cv::Rect(0, 0, region.cols, region.rows);
   if (!depth.empty() && zmax > 0.0f) {
     const float lo = zmin - static_cast<float>(o.depth_margin);
     const float hi = zmax + static_cast<float>(o.depth_margin);
-    for (int v = 0; v < region.rows; ++v) {
+    for (int v = box.y; v < box.y + box.height; ++v) {
       auto* r = region.ptr<uint8_t>(v);
       const auto* z = depth.ptr<float>(v);
-      for (int u = 0; u < region.cols; ++u) {
+      for (int u = box.x; u < box.x + box.width; ++u) {
         // Measured depth outside the range: the static surface behind (or in front of) it.
         if (r[u] != 0 && z[u] > 0.0f && (z[u] < lo || z[u] > hi)) r[u] = 0;
       }
     }
   }
-  cv::bitwise_or(*out, region, *out);
+  cv::Mat target = (*out)(box);
+  cv::bitwise_or(target, region(box), target);
 }
 
 }  // namespace

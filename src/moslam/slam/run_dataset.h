@@ -33,6 +33,21 @@ inline std::string MaskPath(const io::FrameEntry& entry, const std::string& mask
   return path;
 }
 
+// The System's input for one frame of a data set: its images loaded as `options` read them, and
+// (when `mask_folder` is set) its movable-object mask from that folder (see MaskPath).
+inline FrameInput LoadFrameInput(const io::FrameEntry& entry, const SystemOptions& options,
+                                 const std::string& mask_folder = "") {
+  const io::FrameImages images =
+      io::LoadFrameImages(entry, io::ColourMode::kGrey, options.settings.depth_map_factor);
+  FrameInput input;
+  input.timestamp = entry.timestamp;
+  input.image = images.left;
+  input.right = images.right;
+  input.depth = images.depth;
+  if (!mask_folder.empty()) input.mask = io::LoadGreyImage(MaskPath(entry, mask_folder));
+  return input;
+}
+
 struct DatasetRun {
   std::vector<FrameReport> reports;
   eval::Trajectory estimate;
@@ -88,14 +103,7 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
         std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::nanoseconds>(
                                                   std::chrono::duration<double>(offset_s)));
       }
-      const io::FrameImages images =
-          io::LoadFrameImages(entry, io::ColourMode::kGrey, options.settings.depth_map_factor);
-      FrameInput input;
-      input.timestamp = entry.timestamp;
-      input.image = images.left;
-      input.right = images.right;
-      input.depth = images.depth;
-      if (!mask_folder.empty()) input.mask = io::LoadGreyImage(MaskPath(entry, mask_folder));
+      FrameInput input = LoadFrameInput(entry, options, mask_folder);
       if (edit_mask) input.mask = edit_mask(i, input.mask);
       const double cpu0 = ThreadCpuMs();
       run.reports.push_back(system.Track(input));

@@ -21,12 +21,12 @@
 #include "moslam/feature/frame.h"
 #include "moslam/feature/movable_mask.h"
 #include "moslam/feature/orb_extractor.h"
-#include "moslam/feature/structure_planes.h"
 #include "moslam/map/map.h"
+#include "moslam/mapio/map_file.h"
+#include "moslam/slam/frame_mask.h"
 #include "moslam/slam/keyframe_database.h"
 #include "moslam/slam/local_mapper.h"
 #include "moslam/slam/loop_closer.h"
-#include "moslam/slam/mask_propagation.h"
 #include "moslam/slam/moving_regions.h"
 #include "moslam/slam/tracker.h"
 #include "moslam/util/bounded_queue.h"
@@ -62,9 +62,16 @@ void SystemOptions::Check() const {
         "SystemOptions.mask_margin_px, mask_propagation_frames and mask_completion_px must be "
         ">= 0");
   }
+  if (mask_work_scale < 1 || mask_work_scale > 4) {
+    throw InputError("SystemOptions.mask_work_scale must be in 1..4 (got " +
+                     std::to_string(mask_work_scale) + ")");
+  }
   if (background_nice < 0 || background_nice > 19) {
     throw InputError("SystemOptions.background_nice must be in 0..19 (got " +
                      std::to_string(background_nice) + ")");
+  }
+  if (localization && load_map.empty()) {
+    throw InputError("SystemOptions.localization needs a map to localize in (load_map)");
   }
   settings.Check(sensor);
 }
@@ -130,16 +137,13 @@ class System::Impl : public KeyFrameSink {
       tracker_.SetKeyFrameDatabase(keyframe_database_.get());
       map_.SetKeyFrameEraseListener(
           [db = keyframe_database_.get()](const map::KeyFrame& kf) { db->Erase(kf); });
-      if (options_.loop_closing) {
+      if (options_.loop_closing && !options_.localization) {
         loop_closer_ = std::make_unique<LoopCloser>(&map_, camera_, Bf(options),
                                                     keyframe_database_.get(), LoopOptions(options));
       }
     }
-    if (options_.mask_propagation_frames > 0) {
-      MaskPropagationOptions propagation;
-      propagation.max_age = options_.mask_propagation_frames;
-      propagator_ = std::make_unique<MaskPropagator>(camera_, propagation);
-    }
+    if (!options_.load_map.empty()) LoadMap();
+    frame_mask_ = std::make_unique<FrameMask>(camera_, FrameMaskOpts(options_));
     if (!options_.deterministic) mapping_thread_ = std::thread([this] { MappingLoop(); });
     if (!options_.deterministic && loop_closer_) {
       loop_thread_ = std::thread([this] { LoopClosingLoop(); });
@@ -190,6 +194,7 @@ class System::Impl : public KeyFrameSink {
     t.static_scores.enabled = o.static_scores;
     t.pose_consensus = o.pose_consensus;
     t.motion_cross_check = o.motion_cross_check;
+    t.localization = o.localization;
     return t;
   }
 
@@ -226,7 +231,7 @@ class System::Impl : public KeyFrameSink {
     // body has just left or stands on, at the same depth, and would erase it.
     const TrackOutcome outcome = tracker_.Track(std::move(frame), {input.mask, input.depth});
     report.moving_region_fraction = AddMovingRegions(outcome, input);
-    FollowPose(outcome, input);
+    FollowPose(outcome);
     report.movable_points_erased = outcome.movable.erased + outcome.residual_erased;
     movable_points_erased_ += report.movable_points_erased;
     if (outcome.status == TrackStatus::kInitialized) initialized_frame_ = frame_index_;
@@ -267,6 +272,36 @@ class System::Impl : public KeyFrameSink {
     loop_queue_.Close();
     if (loop_thread_.joinable()) loop_thread_.join();
     if (loop_closer_) loop_closer_->WaitForGlobalBundleAdjustment();
+  }
+
+  mapio::MapIdentity Identity() const {
+    return mapio::MakeIdentity(options_.sensor, options_.settings, Bf(options_), vocabulary_.get());
+  }
+
+  // The map of SystemOptions::load_map, indexed in the keyframe database; the tracker starts
+  // lost on it and relocalizes its first frame.
+  void LoadMap() {
+    if (!keyframe_database_) {
+      throw InputError("--load-map " + options_.load_map +
+                       ": a saved map needs a vocabulary to relocalize in it (none given)");
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    mapio::LoadMap(options_.load_map, Identity(), &map_);
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    for (const auto& [id, kf] : map_.keyframes()) keyframe_database_->Add(kf);
+    tracker_.StartFromLoadedMap();
+    spdlog::info("map {}: {} keyframes, {} map points, loaded in {:.0f} ms{}", options_.load_map,
+                 map_.keyframes().size(), map_.points().size(), MsSince(t0),
+                 options_.localization ? " (localization only)" : "");
+  }
+
+  void SaveMap(const std::string& path) {
+    Finish();
+    const auto t0 = std::chrono::steady_clock::now();
+    mapio::SaveMap(map_, Identity(), path);
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    spdlog::info("map {}: {} keyframes, {} map points, saved in {:.0f} ms", path,
+                 map_.keyframes().size(), map_.points().size(), MsSince(t0));
   }
 
   eval::Trajectory CameraTrajectory() const {
@@ -328,8 +363,17 @@ class System::Impl : public KeyFrameSink {
   }
 
  private:
+  static FrameMaskOptions FrameMaskOpts(const SystemOptions& o) {
+    FrameMaskOptions f;
+    f.propagation_frames = o.mask_propagation_frames;
+    f.completion_px = o.mask_completion_px;
+    f.completion_structure = o.completion_structure;
+    f.work_scale = o.mask_work_scale;
+    return f;
+  }
+
   // The frame's movable mask: the input's, united with the masks carried from the last frames,
-  // and (RGB-D) grown over the depth-connected surface it covers.
+  // and (RGB-D) grown over the depth-connected surface it covers (frame_mask.h).
   cv::Mat MaskFor(const FrameInput& input) {
     if (!input.mask.empty() &&
         (input.mask.type() != CV_8UC1 || input.mask.size() != input.image.size())) {
@@ -339,37 +383,25 @@ class System::Impl : public KeyFrameSink {
                        std::to_string(input.mask.rows) + " with " +
                        std::to_string(input.mask.channels()) + " channel(s)");
     }
-    cv::Mat mask = input.mask;
-    if (propagator_) mask = propagator_->MaskFor(input.mask, input.image.size(), velocity_);
-    if (options_.mask_completion_px > 0 && !input.depth.empty() && !mask.empty() &&
-        cv::countNonZero(mask) > 0) {
-      feature::MaskCompletionOptions completion;
-      completion.max_grow_px = options_.mask_completion_px;
-      std::optional<feature::StructurePlanes> structure;
-      if (options_.completion_structure) {
-        structure = feature::StructurePlanes::Find(input.depth, camera_, mask,
-                                                   feature::StructurePlaneOptions{});
-      }
-      mask = feature::CompleteMaskByDepth(mask, input.depth, completion,
-                                          structure ? &*structure : nullptr);
-    }
-    return mask;
+    return frame_mask_->MaskFor(input.mask, input.depth, input.image.size(), velocity_);
   }
 
   // Regions around clusters of keypoints the tracker found inconsistent (moving_regions.h),
   // handed to the propagator, which carries them into the next frames; returns the share of the
   // image they cover.
   float AddMovingRegions(const TrackOutcome& outcome, const FrameInput& input) {
-    if (!options_.moving_regions || !propagator_ || outcome.inconsistent.empty()) return 0.0f;
+    if (!options_.moving_regions || !frame_mask_->carries() || outcome.inconsistent.empty()) {
+      return 0.0f;
+    }
     const cv::Mat regions =
         MovingRegions(outcome.inconsistent, input.depth, input.image.size(), MovingRegionOptions{});
     if (regions.empty()) return 0.0f;
-    propagator_->AddRegion(regions);
+    frame_mask_->AddRegion(regions);
     return static_cast<float>(cv::countNonZero(regions)) / static_cast<float>(regions.total());
   }
 
   // The motion the next frame's mask is carried with: the last frame-to-frame velocity.
-  void FollowPose(const TrackOutcome& outcome, const FrameInput& input) {
+  void FollowPose(const TrackOutcome& outcome) {
     const bool ok =
         outcome.status == TrackStatus::kOk || outcome.status == TrackStatus::kInitialized;
     if (ok && last_T_cam_world_) {
@@ -379,7 +411,7 @@ class System::Impl : public KeyFrameSink {
     }
     last_T_cam_world_.reset();
     if (ok) last_T_cam_world_ = outcome.T_cam_world;
-    if (propagator_) propagator_->Commit(input.depth);
+    frame_mask_->Commit();
   }
 
   feature::Frame MakeFrame(const FrameInput& input, const cv::Mat& mask) {
@@ -449,9 +481,9 @@ class System::Impl : public KeyFrameSink {
   int relocalizations_ = 0;
   int recoveries_ = 0;
   int movable_points_erased_ = 0;
-  // Masks carried between frames (null when SystemOptions::mask_propagation_frames is 0), and
-  // the poses they are carried with.
-  std::unique_ptr<MaskPropagator> propagator_;
+  // The frames' masks (carried between frames, grown over depth), and the poses they are carried
+  // with.
+  std::unique_ptr<FrameMask> frame_mask_;
   std::optional<geometry::SE3> last_T_cam_world_, velocity_;
   int frame_index_ = 0;
   int initialized_frame_ = -1;
@@ -464,5 +496,6 @@ void System::Finish() { impl_->Finish(); }
 eval::Trajectory System::CameraTrajectory() const { return impl_->CameraTrajectory(); }
 eval::Trajectory System::KeyFrameTrajectory() const { return impl_->KeyFrameTrajectory(); }
 MapSummary System::Summary() const { return impl_->Summary(); }
+void System::SaveMap(const std::string& path) { impl_->SaveMap(path); }
 
 }  // namespace moslam::slam

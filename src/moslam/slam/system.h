@@ -96,6 +96,9 @@ struct SystemOptions {
   // which the feet touch; without this, growth is bounded by mask_completion_px alone (moslam run
   // --no-completion-planes; ablations).
   bool completion_structure = true;
+  // The carrying and the growth run on images downsampled by this factor (1..4; slam/frame_mask.h:
+  // 2 cuts their cost ~4x, the network's pixels stay exact; moslam run --mask-work-scale).
+  int mask_work_scale = 2;
   // Geometry for what no network knows (issue 24): each map point's static probability from its
   // residuals across frames weights pose optimization, and points judged moving are erased
   // (slam/static_scores.h; moslam run --no-static-scores) ...
@@ -111,6 +114,15 @@ struct SystemOptions {
   // A motion model that keeps few of the last frame's inliers is cross-checked with the
   // reference keyframe (TrackerOptions::motion_cross_check; moslam run --no-motion-cross-check).
   bool motion_cross_check = true;
+  // A map saved by an earlier run (System::SaveMap, docs/MAP_FORMAT.md) to start from: the first
+  // frames are relocalized in it (a vocabulary is required), then tracking and, without
+  // `localization`, mapping continue on it. Empty: start a new map. A file made with another
+  // sensor, camera or vocabulary, or damaged, is an InputError naming it (moslam run --load-map).
+  std::string load_map;
+  // ORB-SLAM2's localization mode on the loaded map: frames are tracked against it and
+  // relocalized when lost, but no keyframe or map point is added or erased and loop closing is
+  // off, so the map stays as loaded (moslam run --localization). Needs load_map.
+  bool localization = false;
   void Check() const;  // InputError naming the field
 };
 
@@ -189,6 +201,9 @@ class System {
   eval::Trajectory CameraTrajectory() const;
   eval::Trajectory KeyFrameTrajectory() const;
   MapSummary Summary() const;
+  // Finishes (as Finish()) and writes the whole map to `path` (mapio/map_file.h: a temporary file
+  // renamed when complete). InputError when it cannot be written.
+  void SaveMap(const std::string& path);
 
  private:
   class Impl;

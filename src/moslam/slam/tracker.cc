@@ -153,7 +153,7 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
                                  ? std::max(options_.min_inliers, kMinInliersAfterRelocalization)
                                  : options_.min_inliers);
     if (!ok) out.reason = "too few inliers after local-map tracking";
-    if (ok) out.movable = JudgeLocalPoints(images);
+    if (ok && !options_.localization) out.movable = JudgeLocalPoints(images);
     out.local_map_ms = MsSince(t0);
   }
   if (!ok) {
@@ -211,6 +211,17 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
   return out;
 }
 
+void Tracker::StartFromLoadedMap() {
+  initialized_ = true;
+  last_ok_ = false;
+  have_velocity_ = false;
+  have_recovery_motion_ = false;
+  reference_ = nullptr;
+  last_keyframe_ = nullptr;
+  // The map may hold keyframes up to its size: no "just relocalized" pause on keyframes.
+  frames_since_keyframe_ = 0;
+}
+
 bool Tracker::Initialize() {
   if (current_.frame.NumWithDepth() < options_.min_init_points) return false;
   current_.T_cam_world = geometry::SE3::Identity();
@@ -245,7 +256,9 @@ void Tracker::RefreshLastFrame() {
     p = (replacement && !replacement->bad) ? replacement : nullptr;
   }
   // A reference keyframe culled by local mapping hands over to its spanning-tree parent.
-  while (reference_->bad() && reference_->parent()) reference_ = reference_->parent();
+  while (reference_ && reference_->bad() && reference_->parent()) {
+    reference_ = reference_->parent();
+  }
   if (!frame_poses_.empty()) {
     const FramePose& fp = frame_poses_.back();
     if (fp.reference && !fp.reference->bad()) {
@@ -472,7 +485,7 @@ int Tracker::TrackLocalMap(TrackOutcome* out) {
     auto& p = current_.points[i];
     if (!p) continue;
     if (!current_.outlier[i]) {
-      ++p->found;
+      if (!options_.localization) ++p->found;  // culling statistics: the map stays as loaded
       if (p->num_observations() > 0) ++inliers;
     } else if (!options_.monocular) {
       // Stereo / RGB-D: outliers are dropped at once (ORB-SLAM2's TrackLocalMap); monocular keeps
@@ -556,7 +569,7 @@ void Tracker::SearchLocalPoints() {
       p = nullptr;
       continue;
     }
-    ++p->visible;
+    if (!options_.localization) ++p->visible;
     in_frame.insert(p->id);
   }
   // Frustum test of ORB-SLAM2's isInFrustum: in front, inside the scale-invariance range and
@@ -575,7 +588,7 @@ void Tracker::SearchLocalPoints() {
     const double dist = ray.norm();
     if (dist < 0.8 * p->min_distance || dist > 1.2 * p->max_distance) continue;
     if (ray.dot(p->normal) < 0.5 * dist) continue;
-    ++p->visible;
+    if (!options_.localization) ++p->visible;
     candidates.push_back(p);
   }
   // ORB-SLAM2 checks the right coordinate only in the motion-model search.
@@ -586,6 +599,7 @@ bool Tracker::NeedNewKeyFrame() const {
   // ORB-SLAM2's Tracking::NeedNewKeyFrame. Monocular: no close points, a higher reference ratio
   // (0.9: keyframes more often, they are the only source of new points), no "tracking weak"
   // trigger, and no insertion while local mapping is busy.
+  if (options_.localization) return false;
   const size_t num_keyframes = map_->keyframes().size();
   // No keyframe just after a relocalization (unless the map is still small).
   const auto max_frames = static_cast<uint64_t>(options_.max_frames_between_keyframes);

@@ -91,6 +91,10 @@ struct TrackerOptions {
   // the reference keyframe's descriptor matches, the better pose kept (a prediction far off
   // among repeated structure; Tracker::CrossCheckWithReference).
   bool motion_cross_check = true;
+  // ORB-SLAM2's localization mode (mbOnlyTracking): frames are tracked against the map and
+  // relocalized when lost, but no keyframe is made and no map point erased (neither by masks nor
+  // by residuals), so the map stays as it was loaded (slam/system.h, SystemOptions::localization).
+  bool localization = false;
   void Check() const;  // InputError naming the field
 };
 
@@ -144,6 +148,9 @@ class Tracker {
   };
   const std::vector<FramePose>& frame_poses() const { return frame_poses_; }
   bool initialized() const { return initialized_; }
+  // Starts on a map loaded from a file (mapio/map_file.h): initialized but lost, so the first
+  // frame is relocalized in the map (needs the keyframe database) instead of starting a new one.
+  void StartFromLoadedMap();
   // Monocular: initial maps rejected after bundle adjustment (ORB-SLAM2 resets then).
   int rejected_initializations() const { return rejected_initializations_; }
 

@@ -51,7 +51,7 @@ int Tracker::JudgeResiduals(std::vector<InconsistentKeypoint>* inconsistent) {
     if (current_.outlier[i] && probability < 0.5) {
       inconsistent->push_back({f.keypoints[i].pt, f.depth.empty() ? 0.0f : f.depth[i]});
     }
-    if (static_scores_.ShouldCull(p->id)) {
+    if (!options_.localization && static_scores_.ShouldCull(p->id)) {
       map_->EraseMapPoint(p);
       current_.points[i] = nullptr;
       current_.outlier[i] = false;
