@@ -25,6 +25,13 @@ inline CLI::Validator ExistingFileOf(const std::string& what) {
       "FILE");
 }
 
+// Thrown by a command that did its job but must end the process with another status than 0:
+// `moslam run` interrupted by a signal ends with 128 + the signal's number, as a shell reports a
+// process the signal killed, after writing its outputs. main() returns `code`.
+struct ExitStatus {
+  int code = 0;
+};
+
 void AddEvalCommand(CLI::App& app);
 void AddDatasetCommand(CLI::App& app);
 void AddFeaturesCommand(CLI::App& app);

@@ -1,6 +1,7 @@
 // moslam: movable-object-aware visual SLAM. One binary, one subcommand per job.
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -38,6 +39,9 @@ int main(int argc, char** argv) {
   }
   // execv returns only on failure: go on with the defaults.
   if (run_again) execv("/proc/self/exe", argv);
+  // A write past the file-size limit (ulimit -f) fails with EFBIG, reported like a full disk,
+  // instead of ending the process by SIGXFSZ's default action with nothing said.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"moslam: movable-object-aware visual SLAM (ORB-SLAM2 family) and its tools"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "moslam 0.1.0");
@@ -62,6 +66,8 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const moslam::app::ExitStatus& status) {
+    return status.code;
   } catch (const moslam::InputError& e) {
     spdlog::error("{}", e.what());
     return 2;

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "commands.h"
@@ -19,6 +20,7 @@
 #include "moslam/runner/mask_source.h"
 #include "moslam/runner/outputs.h"
 #include "moslam/runner/run_loop.h"
+#include "moslam/runner/stop_signals.h"
 #include "moslam/runner/tracker.h"
 #include "moslam/semantic/mask_refine.h"
 #include "moslam/util/error.h"
@@ -278,11 +280,26 @@ void Run(const RunArgs& args) {
                net::DescribeOpenBlasCore());
 
   runner::CheckGroundTruth(sequence);
-  const std::unique_ptr<runner::Tracker> tracker = MakeTracker(settings, sequence.sensor, args);
-  const runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
+  runner::CheckOutputFolder(out);  // before the run, not after it
+  const std::unique_ptr<runner::Tracker> tracker = MakeTracker(settings, sequence.sensor, args);
+  // SIGINT / SIGTERM from here on end the run after the frame in hand, with its outputs written.
+  const runner::ScopedStopSignals signals;
+  options.stop = signals.flag();
+  runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
+  const int signal = signals.received();
+  if (result.end == runner::RunEnd::kInterrupted) {
+    result.end_message = fmt::format("interrupted by {} after {} frames",
+                                     runner::SignalName(signal), result.frames.size());
+    spdlog::warn("{}; writing the outputs of the frames tracked", result.end_message);
+  } else if (result.end == runner::RunEnd::kFailed) {
+    spdlog::warn("the run failed after {} frames; writing the outputs of the frames tracked",
+                 result.frames.size());
+  }
   const std::string summary = runner::WriteRunOutputs(sequence, result, description, out);
   std::cout << summary << std::flush;
+  runner::RethrowFailure(result);  // exit status and message as for an error before the run
+  if (result.end == runner::RunEnd::kInterrupted) throw ExitStatus{128 + signal};
 }
 
 }  // namespace

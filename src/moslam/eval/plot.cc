@@ -13,6 +13,7 @@
 #include "moslam/eval/plot_figure.h"
 #include "moslam/eval/plot_layout.h"
 #include "moslam/eval/plot_scale.h"
+#include "moslam/util/atomic_file.h"
 #include "moslam/util/error.h"
 #include "moslam/util/strings.h"
 
@@ -47,12 +48,9 @@ void Validate(const TrajectoryPlotData& data, const std::string& path) {
   }
 }
 
+// Whole or not at all (util/atomic_file.h): a plot cut short by a full disk is never left behind.
 void WriteBytes(const std::string& path, const char* bytes, size_t size) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) ThrowInFile(path, "cannot open the plot file for writing");
-  out.write(bytes, static_cast<std::streamsize>(size));
-  out.close();
-  if (!out) ThrowInFile(path, "writing the plot file failed");
+  WriteFileAtomically(path, std::string_view(bytes, size), "plot");
 }
 
 }  // namespace

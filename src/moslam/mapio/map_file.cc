@@ -13,6 +13,7 @@
 
 #include "moslam/mapio/map_archive.h"
 #include "moslam/mapio/map_records.h"
+#include "moslam/util/atomic_file.h"
 #include "moslam/util/check.h"
 #include "moslam/util/crc32.h"
 #include "moslam/util/error.h"
@@ -185,24 +186,7 @@ void SaveMap(const map::Map& map, const MapIdentity& identity, const std::string
     std::lock_guard<std::mutex> lock(map.mutex());
     bytes = SerializeMap(map, identity);
   }
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out)
-      throw InputError(fmt::format("{}: cannot write the map (cannot create {})", path, tmp));
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw InputError(fmt::format("{}: cannot write the map (write to {} failed)", path, tmp));
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    throw InputError(fmt::format("{}: cannot write the map ({})", path, ec.message()));
-  }
+  WriteFileAtomically(path, bytes, "map");
 }
 
 void ParseMap(const std::string& bytes, const std::string& path, const MapIdentity& expected,

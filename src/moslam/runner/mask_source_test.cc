@@ -74,7 +74,7 @@ TEST(MaskSourceTest, MissingMaskIsAnErrorNamingTheFileUnlessEmptyIsAllowed) {
   FakeTracker tracker;
   const auto strict = MakeMaskSource(options, seq);
   const std::string missing = MaskPathFor(masks_dir.path(), seq.frames[1]);
-  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *strict, Quiet()); }),
+  EXPECT_THAT(ErrorOf([&] { RethrowFailure(RunSequence(seq, tracker, *strict, Quiet())); }),
               HasSubstr(missing + ": mask of frame 1"));
 
   options.missing_empty = true;
@@ -170,7 +170,7 @@ TEST(MaskSourceTest, SynthGroundTruthNeedsItsFiles) {
   AddClassImages(data, 1);  // frame 1 has no class image
   const auto masks = MakeMaskSource(options, seq);
   FakeTracker tracker;
-  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, Quiet()); }),
+  EXPECT_THAT(ErrorOf([&] { RethrowFailure(RunSequence(seq, tracker, *masks, Quiet())); }),
               HasSubstr("class/" + test::Stamp(1) + ".png: class image of frame 1"));
 }
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -13,22 +12,13 @@
 #include "moslam/eval/report.h"
 #include "moslam/eval/statistics.h"
 #include "moslam/net/blas_core.h"
+#include "moslam/util/atomic_file.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
 
 namespace moslam::runner {
 namespace fs = std::filesystem;
 namespace {
-
-std::ofstream OpenForWriting(const std::string& path) {
-  std::ofstream out(path);
-  if (!out) ThrowInFile(path, "cannot be written");
-  return out;
-}
-
-void CheckWritten(const std::ofstream& out, const std::string& path) {
-  if (!out) ThrowInFile(path, "could not be written completely");
-}
 
 // A CSV field, quoted when it holds a separator or a quote (RFC 4180).
 std::string CsvField(const std::string& text) {
@@ -156,36 +146,35 @@ void WriteOrbSlamTum(const eval::Trajectory& trajectory, int pose_decimals,
   if (trajectory.size() != trajectory.timestamps.size()) {
     ThrowInFile(path, "a TUM trajectory needs one timestamp per pose");
   }
-  std::ofstream out = OpenForWriting(path);
+  std::string out;
   for (size_t i = 0; i < trajectory.size(); ++i) {
     const Eigen::Vector3d& t = trajectory.poses[i].translation();
     const Eigen::Quaterniond& q = trajectory.poses[i].rotation();
     const int p = pose_decimals;
-    out << fmt::format("{:.6f} {:.{}f} {:.{}f} {:.{}f} {:.{}f} {:.{}f} {:.{}f} {:.{}f}\n",
+    out += fmt::format("{:.6f} {:.{}f} {:.{}f} {:.{}f} {:.{}f} {:.{}f} {:.{}f} {:.{}f}\n",
                        trajectory.timestamps[i], t.x(), p, t.y(), p, t.z(), p, q.x(), p, q.y(), p,
                        q.z(), p, q.w(), p);
   }
-  CheckWritten(out, path);
+  WriteFileAtomically(path, out, "trajectory");
 }
 
 void WriteOrbSlamKitti(const eval::Trajectory& trajectory, const std::string& path) {
-  std::ofstream out = OpenForWriting(path);
+  std::string out;
   for (size_t i = 0; i < trajectory.size(); ++i) {
     const geometry::Matrix3x4d m = trajectory.poses[i].Matrix3x4();
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 4; ++c)
-        out << fmt::format("{:.9f}{}", m(r, c), r == 2 && c == 3 ? '\n' : ' ');
+        out += fmt::format("{:.9f}{}", m(r, c), r == 2 && c == 3 ? '\n' : ' ');
     }
   }
-  CheckWritten(out, path);
+  WriteFileAtomically(path, out, "trajectory");
 }
 
 void WriteFramesCsv(const RunResult& result, const std::string& path) {
-  std::ofstream out = OpenForWriting(path);
-  out << kFramesCsvHeader << "\n";
+  std::string out = std::string(kFramesCsvHeader) + "\n";
   for (const FrameRecord& f : result.frames) {
     const slam::FrameReport& r = f.report;
-    out << fmt::format(
+    out += fmt::format(
         "{},{:.6f},{},{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.3f},{:.3f}"
         ",{},{},{},{:.3f},{},{:.4f}\n",
         f.index, f.timestamp, StateName(r.state), CsvField(r.reason), r.num_features, r.num_matches,
@@ -194,7 +183,7 @@ void WriteFramesCsv(const RunResult& result, const std::string& path) {
         f.network_ms, f.crf_ms, r.relocalized ? 1 : 0, r.recovered ? 1 : 0, f.segmented ? 1 : 0,
         r.times.mask_ms, r.movable_points_erased, r.moving_region_fraction);
   }
-  CheckWritten(out, path);
+  WriteFileAtomically(path, out, "per-frame log");
 }
 
 namespace {
@@ -294,6 +283,9 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                          {"deterministic", d.deterministic},
                          {"realtime", d.realtime}};
   json["ate"] = ate ? ate->json : nlohmann::json(nullptr);
+  // How the run ended: "completed", or "failed" / "interrupted" with why; the counts above are
+  // those of the frames tracked until then.
+  json["end"] = {{"status", RunEndName(result.end)}, {"message", result.end_message}};
   return json;
 }
 
@@ -327,8 +319,24 @@ std::string FormatSummary(const RunResult& result, const RunDescription& d,
       "tracking {:.1f} ms | mapping {:.1f} ms (per frame; own thread unless --deterministic)\n",
       b["segmentation"].get<double>(), b["crf"].get<double>(), b["extraction"].get<double>(),
       b["tracking"].get<double>(), b["mapping_per_frame"].get<double>());
+  if (result.end != RunEnd::kCompleted) {
+    text += fmt::format("ended        {}: {}\n", RunEndName(result.end), result.end_message);
+  }
   if (ate) text += "ATE\n" + ate->text;
   return text;
+}
+
+void CheckOutputFolder(const std::string& out_dir) {
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) ThrowInFile(out_dir, "output folder cannot be created: " + ec.message());
+  const std::string probe = (fs::path(out_dir) / ".moslam_write_check").string();
+  try {
+    WriteFileAtomically(probe, "", "write check");
+  } catch (const InputError&) {
+    ThrowInFile(out_dir, "output folder cannot be written (creating a file there failed)");
+  }
+  fs::remove(probe, ec);
 }
 
 std::string WriteRunOutputs(const io::Sequence& sequence, const RunResult& result,
@@ -337,19 +345,41 @@ std::string WriteRunOutputs(const io::Sequence& sequence, const RunResult& resul
   fs::create_directories(out_dir, ec);
   if (ec) ThrowInFile(out_dir, "output folder cannot be created: " + ec.message());
   const fs::path out(out_dir);
+  // Each file is written whole or not at all (util/atomic_file.h); one that fails (a full disk)
+  // does not stop the others, summary.json lists it, and the first failure is thrown at the end.
+  std::vector<std::string> failures;
+  const auto attempt = [&failures](const auto& write) {
+    try {
+      write();
+      return true;
+    } catch (const InputError& e) {
+      spdlog::error("{}", e.what());
+      failures.push_back(e.what());
+      return false;
+    }
+  };
   const std::string camera_path = (out / "CameraTrajectory.txt").string();
-  WriteOrbSlamTum(result.camera, 9, camera_path);
+  const bool camera = attempt([&] { WriteOrbSlamTum(result.camera, 9, camera_path); });
   if (description.format == io::DatasetFormat::kKitti) {
-    WriteOrbSlamKitti(result.camera, (out / "CameraTrajectory_kitti.txt").string());
+    attempt(
+        [&] { WriteOrbSlamKitti(result.camera, (out / "CameraTrajectory_kitti.txt").string()); });
   }
-  WriteOrbSlamTum(result.keyframes, 7, (out / "KeyFrameTrajectory.txt").string());
-  WriteFramesCsv(result, (out / "frames.csv").string());
-  const std::optional<RunAte> ate =
-      EvaluateRun(sequence, camera_path, (out / "trajectory.png").string());
-  const std::string summary_path = (out / "summary.json").string();
-  std::ofstream summary = OpenForWriting(summary_path);
-  summary << SummaryJson(result, description, ate).dump(2) << "\n";
-  CheckWritten(summary, summary_path);
+  attempt([&] { WriteOrbSlamTum(result.keyframes, 7, (out / "KeyFrameTrajectory.txt").string()); });
+  attempt([&] { WriteFramesCsv(result, (out / "frames.csv").string()); });
+  std::optional<RunAte> ate;
+  if (camera) {
+    attempt([&] { ate = EvaluateRun(sequence, camera_path, (out / "trajectory.png").string()); });
+  }
+  nlohmann::json summary = SummaryJson(result, description, ate);
+  summary["output_errors"] = failures;
+  attempt([&] {
+    WriteFileAtomically((out / "summary.json").string(), summary.dump(2) + "\n", "run summary");
+  });
+  if (!failures.empty()) {
+    throw InputError(
+        fmt::format("{} of the run's outputs in {} could not be written; the first: {}",
+                    failures.size(), out_dir, failures.front()));
+  }
   spdlog::info("outputs written to {}", out_dir);
   return FormatSummary(result, description, ate);
 }

@@ -8,7 +8,9 @@
 //   frames.csv                  one row per frame, kFramesCsvHeader's columns
 //   summary.json                counts, per-stage time statistics, the per-frame breakdown
 //                               (segmentation, CRF, extraction, tracking, mapping), settings, data
-//                               set, mask source, and the ATE when the data set has ground truth
+//                               set, mask source, the ATE when the data set has ground truth, how
+//                               the run ended ("end": completed, failed or interrupted, and why)
+//                               and the outputs that could not be written ("output_errors")
 //   trajectory.png              ground truth against the aligned estimate (with ground truth only)
 #pragma once
 
@@ -74,8 +76,15 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& descri
 std::string FormatSummary(const RunResult& result, const RunDescription& description,
                           const std::optional<RunAte>& ate);
 
+// Creates `out_dir` and checks that a file can be written there, so that a run whose outputs
+// cannot be kept fails before it starts: InputError naming the folder.
+void CheckOutputFolder(const std::string& out_dir);
+
 // Writes every output into `out_dir` (created if needed) and returns the printed summary.
-// CameraTrajectory_kitti.txt is written for KITTI input (description.format) only.
+// CameraTrajectory_kitti.txt is written for KITTI input (description.format) only. Each file is
+// written whole or not at all (a temporary name, then a rename); a file that cannot be written
+// (a full disk) leaves the others written, is listed in summary.json's "output_errors" and is
+// thrown as an InputError at the end.
 std::string WriteRunOutputs(const io::Sequence& sequence, const RunResult& result,
                             const RunDescription& description, const std::string& out_dir);
 

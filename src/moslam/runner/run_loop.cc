@@ -48,6 +48,22 @@ const char* StateName(slam::TrackingState state) {
   return "?";
 }
 
+const char* RunEndName(RunEnd end) {
+  switch (end) {
+    case RunEnd::kCompleted:
+      return "completed";
+    case RunEnd::kFailed:
+      return "failed";
+    case RunEnd::kInterrupted:
+      return "interrupted";
+  }
+  return "?";
+}
+
+void RethrowFailure(const RunResult& result) {
+  if (result.end == RunEnd::kFailed && result.error) std::rethrow_exception(result.error);
+}
+
 FrameRange ParseFrameRange(const std::string& text, const std::string& option) {
   const size_t colon = text.find(':');
   if (colon == std::string::npos || text.find(':', colon + 1) != std::string::npos) {
@@ -136,6 +152,86 @@ LoadedFrame LoadFrame(const io::FrameEntry& frame, MaskSource& masks, const RunO
   return loaded;
 }
 
+namespace {
+
+bool Skipped(const RunOptions& options, size_t index) {
+  return options.skip && index >= options.skip->first &&
+         (!options.skip->last || index < *options.skip->last);
+}
+
+bool StopRequested(const RunOptions& options) {
+  return options.stop != nullptr && options.stop->load() != 0;
+}
+
+// Frames result->first..last through the tracker, loaded and segmented in threads of their own;
+// returns when the range is done, when RunOptions::stop is set, or by throwing what a stage or
+// the tracker threw, after both threads have stopped.
+void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& masks,
+                 const RunOptions& options, Clock::time_point start, Progress* progress,
+                 RunResult* result) {
+  // Destroyed before Finish(), stage first: stops and joins both threads also when Track(),
+  // segmentation or loading threw.
+  FrameLoader loader(
+      sequence, result->first, result->last,
+      [&options](const io::FrameEntry& f) { return LoadImages(f, options); },
+      options.queue_capacity);
+  // A network source gets two stages, network then refinement (the CRF), so that on two
+  // cores the CRF of frame k runs beside the network of frame k+1.
+  // --segment-every: the frames the source runs on.
+  const auto due = [first = result->first, every = options.segment_every](const LoadedFrame& f) {
+    return (static_cast<size_t>(f.index) - first) % static_cast<size_t>(every) == 0;
+  };
+  std::optional<SegmentationStage> network_stage;
+  if (masks.Pipelined()) {
+    network_stage.emplace([&loader] { return loader.Next(); }, [&loader] { loader.Stop(); },
+                          [&masks, &due](LoadedFrame& f) {
+                            if (due(f)) PredictFrame(masks, &f);
+                          },
+                          options.queue_capacity);
+  }
+  SegmentationStage stage([&] { return network_stage ? network_stage->Next() : loader.Next(); },
+                          [&] { network_stage ? network_stage->Stop() : loader.Stop(); },
+                          [&masks, &due, pipelined = masks.Pipelined()](LoadedFrame& f) {
+                            if (!due(f)) return;
+                            pipelined ? RefineFrame(masks, &f) : SegmentFrame(masks, &f);
+                          },
+                          options.queue_capacity);
+  const double first_stamp = sequence.frames[result->first].timestamp;
+  while (std::optional<LoadedFrame> frame = stage.Next()) {
+    if (StopRequested(options)) {
+      result->end = RunEnd::kInterrupted;
+      result->end_message = fmt::format("stopped before frame {}", frame->index);
+      return;
+    }
+    // Skipped frames are loaded (the loader reads the range in order) but never tracked.
+    if (Skipped(options, static_cast<size_t>(frame->index))) continue;
+    if (options.realtime) {
+      // Pacing is the one legitimate sleep: a frame is not given to the tracker before its
+      // time on the data set's clock, counted from the first frame.
+      const auto at =
+          start + std::chrono::duration_cast<Clock::duration>(
+                      std::chrono::duration<double>(frame->input.timestamp - first_stamp));
+      std::this_thread::sleep_until(at);
+    }
+    FrameRecord record;
+    record.index = frame->index;
+    record.timestamp = frame->input.timestamp;
+    record.mask_ms = frame->mask_ms;
+    record.network_ms = frame->network_ms;
+    record.crf_ms = frame->crf_ms;
+    record.mask_fraction = frame->mask_fraction;
+    record.segmented = due(*frame);
+    record.report = TrackFrame(tracker, *frame);
+    spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,
+                  record.timestamp, StateName(record.report.state), record.report.num_features,
+                  record.report.num_inliers, record.report.times.total_ms);
+    result->frames.push_back(std::move(record));
+    if (progress != nullptr) progress->Update(result->frames.size());
+  }
+}
+
+}  // namespace
+
 RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource& masks,
                       const RunOptions& options) {
   options.Check();
@@ -146,74 +242,32 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource
     ThrowInput("--frames: {}:{} is outside the sequence's {} frames (0:{})", result.first,
                result.last, sequence.size(), sequence.size());
   }
-  const auto skipped = [&](size_t index) {
-    return options.skip && index >= options.skip->first &&
-           (!options.skip->last || index < *options.skip->last);
-  };
-  for (size_t i = result.first; i < result.last; ++i) result.skipped += skipped(i) ? 1 : 0;
+  for (size_t i = result.first; i < result.last; ++i) result.skipped += Skipped(options, i) ? 1 : 0;
   const size_t count = result.last - result.first - result.skipped;
   result.frames.reserve(count);
   const auto start = Clock::now();
   std::optional<Progress> progress;
   if (options.progress) progress.emplace("tracking", count, 2.0, "frames");
-  {
-    // Destroyed before Finish(), stage first: stops and joins both threads also when Track(),
-    // segmentation or loading threw.
-    FrameLoader loader(
-        sequence, result.first, result.last,
-        [&options](const io::FrameEntry& f) { return LoadImages(f, options); },
-        options.queue_capacity);
-    // A network source gets two stages, network then refinement (the CRF), so that on two
-    // cores the CRF of frame k runs beside the network of frame k+1.
-    // --segment-every: the frames the source runs on.
-    const auto due = [first = result.first, every = options.segment_every](const LoadedFrame& f) {
-      return (static_cast<size_t>(f.index) - first) % static_cast<size_t>(every) == 0;
-    };
-    std::optional<SegmentationStage> network_stage;
-    if (masks.Pipelined()) {
-      network_stage.emplace([&loader] { return loader.Next(); }, [&loader] { loader.Stop(); },
-                            [&masks, &due](LoadedFrame& f) {
-                              if (due(f)) PredictFrame(masks, &f);
-                            },
-                            options.queue_capacity);
-    }
-    SegmentationStage stage([&] { return network_stage ? network_stage->Next() : loader.Next(); },
-                            [&] { network_stage ? network_stage->Stop() : loader.Stop(); },
-                            [&masks, &due, pipelined = masks.Pipelined()](LoadedFrame& f) {
-                              if (!due(f)) return;
-                              pipelined ? RefineFrame(masks, &f) : SegmentFrame(masks, &f);
-                            },
-                            options.queue_capacity);
-    const double first_stamp = sequence.frames[result.first].timestamp;
-    while (std::optional<LoadedFrame> frame = stage.Next()) {
-      // Skipped frames are loaded (the loader reads the range in order) but never tracked.
-      if (skipped(static_cast<size_t>(frame->index))) continue;
-      if (options.realtime) {
-        // Pacing is the one legitimate sleep: a frame is not given to the tracker before its
-        // time on the data set's clock, counted from the first frame.
-        const auto due =
-            start + std::chrono::duration_cast<Clock::duration>(
-                        std::chrono::duration<double>(frame->input.timestamp - first_stamp));
-        std::this_thread::sleep_until(due);
-      }
-      FrameRecord record;
-      record.index = frame->index;
-      record.timestamp = frame->input.timestamp;
-      record.mask_ms = frame->mask_ms;
-      record.network_ms = frame->network_ms;
-      record.crf_ms = frame->crf_ms;
-      record.mask_fraction = frame->mask_fraction;
-      record.segmented = due(*frame);
-      record.report = TrackFrame(tracker, *frame);
-      spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,
-                    record.timestamp, StateName(record.report.state), record.report.num_features,
-                    record.report.num_inliers, record.report.times.total_ms);
-      result.frames.push_back(std::move(record));
-      if (progress) progress->Update(result.frames.size());
-    }
+  try {
+    TrackFrames(sequence, tracker, masks, options, start, progress ? &*progress : nullptr, &result);
+  } catch (const std::exception& e) {
+    // The frames before the error keep their poses: the tracker is finished as at the end.
+    result.end = RunEnd::kFailed;
+    result.end_message = e.what();
+    result.error = std::current_exception();
   }
   if (progress) progress->Finish();
-  tracker.Finish();
+  try {
+    tracker.Finish();  // saving a map (--save-map) may fail on a full disk
+  } catch (const std::exception& e) {
+    if (result.end == RunEnd::kFailed) {
+      spdlog::error("finishing the tracker after the error: {}", e.what());
+    } else {
+      result.end = RunEnd::kFailed;
+      result.end_message = e.what();
+      result.error = std::current_exception();
+    }
+  }
   result.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   result.camera = tracker.CameraTrajectory();
   result.keyframes = tracker.KeyFrameTrajectory();

@@ -5,7 +5,9 @@
 // outputs is outputs.h's job.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
+#include <exception>
 #include <optional>
 #include <string>
 #include <vector>
@@ -48,8 +50,21 @@ struct RunOptions {
   // `image_size_source` names where it comes from (the settings file) in the error.
   cv::Size image_size;
   std::string image_size_source = "the settings";
+  // Read between frames; once it is nonzero the run ends after the frame in hand as if the data
+  // had ended there (the tracker is finished, the result holds every frame tracked) and the result
+  // says RunEnd::kInterrupted. `moslam run` points it at the number of the signal (SIGINT,
+  // SIGTERM) its handler stored. nullptr: never.
+  const std::atomic<int>* stop = nullptr;
   void Check() const;  // InputError naming the field
 };
+
+// How a run ended.
+enum class RunEnd {
+  kCompleted,    // every frame of the range went through the tracker
+  kFailed,       // an error while loading, segmenting or tracking a frame (RunResult::error)
+  kInterrupted,  // RunOptions::stop was set
+};
+const char* RunEndName(RunEnd end);  // "completed", "failed", "interrupted"
 
 // One frame as frames.csv records it.
 struct FrameRecord {
@@ -72,7 +87,13 @@ struct RunResult {
   eval::Trajectory keyframes;  // Tracker::KeyFrameTrajectory after Finish
   slam::MapSummary map;
   double wall_s = 0.0;  // from the start of loading to the end of Finish
+  RunEnd end = RunEnd::kCompleted;
+  std::string end_message;   // kFailed: the error's message; kInterrupted: the stop's value
+  std::exception_ptr error;  // kFailed: the exception, to rethrow once the outputs are written
 };
+
+// Rethrows the exception that ended a failed run; does nothing for any other end.
+void RethrowFailure(const RunResult& result);
 
 // The images of one frame per `options` (the loader thread's part).
 LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options);
@@ -86,9 +107,12 @@ void RefineFrame(MaskSource& masks, LoadedFrame* frame);
 // Both, in the caller's thread.
 LoadedFrame LoadFrame(const io::FrameEntry& frame, MaskSource& masks, const RunOptions& options);
 
-// Runs sequence.frames[range] through `tracker`. Loading and mask errors (InputError naming the
-// file, or a network's error) are rethrown here after the loader and segmentation threads have
-// stopped.
+// Runs sequence.frames[range] through `tracker`. Options outside their range throw InputError
+// before anything runs. An error in the middle of the run (loading, a mask source or the tracker
+// throwing: an InputError naming the file, a network's error) ends it as a result, not an
+// exception (issue 31): the loader and segmentation threads are stopped, the tracker is finished,
+// and the result holds the frames tracked before the error with RunEnd::kFailed and the
+// exception, so that the caller writes what was done and then fails (RethrowFailure).
 RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource& masks,
                       const RunOptions& options);
 

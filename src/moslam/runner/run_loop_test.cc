@@ -27,6 +27,7 @@ namespace fs = std::filesystem;
 using ::moslam::testing::ErrorOf;
 using test::FakeTracker;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 std::vector<std::string> Lines(const std::string& path) {
   std::ifstream in(path);
@@ -111,8 +112,16 @@ TEST(RunLoopTest, TumRunWritesEveryOutputInItsFormat) {
   EXPECT_EQ(summary["ate"]["translation_m"]["count"], 5);
   EXPECT_LT(summary["ate"]["translation_m"]["rmse"].get<double>(), 1e-6);
   EXPECT_TRUE(fs::exists(dir / "trajectory.png"));
+  EXPECT_EQ(summary["end"]["status"], "completed");
+  EXPECT_EQ(summary["end"]["message"], "");
+  EXPECT_TRUE(summary["output_errors"].empty());
   EXPECT_THAT(text, HasSubstr("5 tracked, 1 lost"));
   EXPECT_THAT(text, HasSubstr("ATE"));
+  EXPECT_THAT(text, Not(HasSubstr("ended")));
+  // Nothing but the outputs: no temporary file is left.
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_THAT(entry.path().string(), Not(HasSubstr(".tmp"))) << entry.path();
+  }
 }
 
 TEST(RunLoopTest, KittiRunAddsKittiTrajectoryAndEvaluatesByTimesTxt) {
@@ -240,7 +249,7 @@ TEST(RunLoopTest, FrameRangeSelectsAndIsChecked) {
   ASSERT_EQ(result.frames.size(), 2u);
   EXPECT_EQ(result.frames[1].index, 2);
   options.frames = ParseFrameRange("2:9");
-  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, options); }),
+  EXPECT_THAT(ErrorOf([&] { RethrowFailure(RunSequence(seq, tracker, *masks, options)); }),
               HasSubstr("outside the sequence's 5 frames"));
 }
 
@@ -254,7 +263,7 @@ TEST(RunLoopTest, ParseFrameRangeForms) {
   EXPECT_THAT(ErrorOf([] { ParseFrameRange("-1:5"); }), HasSubstr("'-1'"));
 }
 
-TEST(RunLoopTest, LoaderErrorReachesTheCallerAfterEarlierFrames) {
+TEST(RunLoopTest, LoaderErrorEndsTheRunAfterTheEarlierFrames) {
   testing::TempDir data;
   test::MakeKitti(data, 12);
   const io::Sequence seq = io::ReadDataset(data.path());
@@ -264,9 +273,15 @@ TEST(RunLoopTest, LoaderErrorReachesTheCallerAfterEarlierFrames) {
   FakeTracker tracker;
   RunOptions options = Quiet();
   options.queue_capacity = 1;
-  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, options); }), HasSubstr(missing));
+  const RunResult result = RunSequence(seq, tracker, *masks, options);
+  EXPECT_EQ(result.end, RunEnd::kFailed);
+  EXPECT_THAT(result.end_message, HasSubstr(missing));
+  EXPECT_THAT(ErrorOf([&] { RethrowFailure(result); }), HasSubstr(missing));
   EXPECT_EQ(tracker.masks.size(), 7u);  // frames 0-6 were tracked, in order, before the error
-  EXPECT_FALSE(tracker.finished);
+  // ... and keep their poses: the tracker was finished as at the end of the data.
+  EXPECT_TRUE(tracker.finished);
+  EXPECT_EQ(result.frames.size(), 7u);
+  EXPECT_EQ(result.camera.size(), 7u);
 }
 
 TEST(RunLoopTest, TrackerErrorStopsTheLoaderWithoutDeadlock) {
@@ -280,8 +295,12 @@ TEST(RunLoopTest, TrackerErrorStopsTheLoaderWithoutDeadlock) {
   };
   RunOptions options = Quiet();
   options.queue_capacity = 1;  // the loader is blocked on a full queue when the tracker throws
-  EXPECT_THROW(RunSequence(seq, tracker, *masks, options), std::runtime_error);
+  const RunResult result = RunSequence(seq, tracker, *masks, options);
+  EXPECT_EQ(result.end, RunEnd::kFailed);
+  EXPECT_EQ(result.end_message, "tracker failed");
+  EXPECT_THROW(RethrowFailure(result), std::runtime_error);
   EXPECT_EQ(tracker.masks.size(), 2u);
+  EXPECT_EQ(result.frames.size(), 2u);
 }
 
 // Issue 31: images of another size than the settings' were tracked with intrinsics for the
@@ -301,14 +320,14 @@ TEST(RunLoopTest, AnImageOfAnotherSizeThanTheSettingsIsNamed) {
   test::WriteImage(data, "depth/" + test::Stamp(3) + ".png",
                    cv::Mat(8, 8, CV_16UC1, cv::Scalar(5000)));
   FakeTracker tracker;
-  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, options); }),
+  EXPECT_THAT(ErrorOf([&] { RethrowFailure(RunSequence(seq, tracker, *masks, options)); }),
               ::testing::AllOf(HasSubstr(odd), HasSubstr("frame 3"), HasSubstr("8x8"),
                                HasSubstr("settings.yaml"), HasSubstr("24x16")));
   EXPECT_EQ(tracker.masks.size(), 3u);
   // The whole sequence at another size fails at its first frame.
   FakeTracker other;
   options.image_size = cv::Size(2 * test::kCols, 2 * test::kRows);
-  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, other, *masks, options); }),
+  EXPECT_THAT(ErrorOf([&] { RethrowFailure(RunSequence(seq, other, *masks, options)); }),
               ::testing::AllOf(HasSubstr(data.path() + "/rgb/" + test::Stamp(0) + ".png"),
                                HasSubstr("48x32")));
   EXPECT_TRUE(other.masks.empty());
@@ -323,7 +342,7 @@ TEST(RunLoopTest, AnInputErrorOfTheTrackerNamesTheFrameAndImage) {
   tracker.before_track = [](int i) {
     if (i == 2) ThrowInput("ORB extractor: the image is 16x16, smaller than the minimum 64x64");
   };
-  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, Quiet()); }),
+  EXPECT_THAT(ErrorOf([&] { RethrowFailure(RunSequence(seq, tracker, *masks, Quiet())); }),
               ::testing::AllOf(HasSubstr(data.path() + "/image_0/000002.png"), HasSubstr("frame 2"),
                                HasSubstr("smaller than the minimum")));
 }

@@ -214,7 +214,7 @@ TEST(SegmentationStage, RunSequenceStopsCleanlyWhenTheProviderFails) {
   const io::Sequence seq = io::ReadDataset(data.path());
   test::FakeTracker tracker;
   const auto masks = MakeProviderMaskSource(std::make_unique<FakeProvider>(2));
-  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, Quiet()); }),
+  EXPECT_THAT(ErrorOf([&] { RethrowFailure(RunSequence(seq, tracker, *masks, Quiet())); }),
               HasSubstr("out of memory"));
   EXPECT_EQ(tracker.masks.size(), 2u);  // frames 0 and 1 were tracked, nothing after the error
 }
@@ -225,7 +225,8 @@ TEST(SegmentationStage, RunSequenceStopsCleanlyWhenTheRefinementFails) {
   const io::Sequence seq = io::ReadDataset(data.path());
   test::FakeTracker tracker;
   const auto masks = MakeProviderMaskSource(std::make_unique<FakeProvider>(-1, 3));
-  EXPECT_THAT(ErrorOf([&] { RunSequence(seq, tracker, *masks, Quiet()); }), HasSubstr("bad depth"));
+  EXPECT_THAT(ErrorOf([&] { RethrowFailure(RunSequence(seq, tracker, *masks, Quiet())); }),
+              HasSubstr("bad depth"));
   EXPECT_EQ(tracker.masks.size(), 3u);  // frames 0 to 2 were tracked, nothing after the error
 }
 
