@@ -45,10 +45,11 @@ def expect(condition, message):
         raise Failure(message)
 
 
-def run_command(moslam, tum, out, extra):
+def run_command(moslam, tum, out, extra, quiet=True):
+    """`--quiet` keeps the log at warnings: the signal cases leave it out to read the debug log."""
     return [moslam, "--log-level", "debug", "run", "--dataset", "tum", tum, "--settings",
-            os.path.join(tum, "settings.yaml"), "--vocabulary", "none", "--out", out,
-            "--quiet"] + extra
+            os.path.join(tum, "settings.yaml"), "--vocabulary", "none", "--out", out] + (
+                ["--quiet"] if quiet else []) + extra
 
 
 def check_outputs(out, status, frames=None):
@@ -77,12 +78,16 @@ def case_signal(moslam, data, work, sig, code):
     """The signal arrives once frame 5 has been tracked (the debug log says so), in a run paced
     at the data's 30 frames/s, so that most of it is still ahead."""
     out = os.path.join(work, f"out_{sig.name}")
-    proc = subprocess.Popen(run_command(moslam, data["tum"], out, ["--realtime"]), env=ENV,
+    proc = subprocess.Popen(run_command(moslam, data["tum"], out, ["--realtime"], quiet=False),
+                            env=ENV,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    sent = False
     for line in proc.stderr:
         if "frame 5 (" in line:
             proc.send_signal(sig)
+            sent = True
             break
+    expect(sent, "the debug log never reported frame 5")
     stdout, stderr = proc.communicate(timeout=120)
     expect(proc.returncode == code, f"exit status {proc.returncode}, expected {code}: {stderr[-800:]}")
     summary = check_outputs(out, "interrupted")
