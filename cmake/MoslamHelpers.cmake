@@ -1,11 +1,13 @@
 # Helpers that keep every module's CMakeLists.txt short and uniform.
 #
 #   moslam_module(<name> SOURCES ... DEPS ...)   -> library target moslam_<name>, alias moslam::<name>
-#   moslam_test(<module> <name> SOURCES ... DEPS ... [SHARDS n] [COST seconds])
+#   moslam_test(<module> <name> SOURCES ... DEPS ... [SHARDS n] [COST seconds] [THREADS])
 #       -> test binary, registered as <module>/<name>; with SHARDS n as n tests <module>/<name>/k
 #          (GoogleTest's sharding: test k of n runs every n-th test case), so that the long
 #          whole-system tests of one file run side by side under `ctest -j`; COST: the seconds
-#          it takes in a release build, so that ctest starts the long ones first
+#          it takes in a release build, so that ctest starts the long ones first; THREADS: the
+#          test runs code in several threads, so the ThreadSanitizer build runs it (label
+#          `threads`, built by the target `threaded_tests`: scripts/test.sh tsan)
 #   moslam_benchmark(<name> SOURCES ... DEPS ...)     -> Google Benchmark program (not a test)
 
 function(moslam_module name)
@@ -21,7 +23,7 @@ function(moslam_test module name)
   if(NOT MOSLAM_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "SHARDS;COST" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "THREADS" "SHARDS;COST" "SOURCES;DEPS" ${ARGN})
   set(target test_${module}_${name})
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} moslam::testing GTest::gtest GTest::gmock
@@ -31,6 +33,11 @@ function(moslam_test module name)
   endif()
   if(NOT ARG_COST)
     set(ARG_COST 0)
+  endif()
+  set(labels ${module})
+  if(ARG_THREADS)
+    list(APPEND labels threads)
+    add_dependencies(threaded_tests ${target})
   endif()
   math(EXPR last "${ARG_SHARDS} - 1")
   foreach(k RANGE ${last})
@@ -47,7 +54,7 @@ function(moslam_test module name)
     # OMP_WAIT_POLICY: libtorch's OpenMP threads must not spin while ctest runs tests in
     # parallel (apps/moslam/main.cc says why).
     set_tests_properties(${test_name} PROPERTIES WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
-                                                 LABELS ${module}
+                                                 LABELS "${labels}"
                                                  COST ${ARG_COST}
                                                  ENVIRONMENT "OMP_WAIT_POLICY=passive;${shard_env}")
   endforeach()

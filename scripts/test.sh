@@ -17,4 +17,7 @@ export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 # Suppressions for reports inside system libraries (each file says which and why).
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan_suppressions.txt}"
 export TSAN_OPTIONS="${TSAN_OPTIONS:-suppressions=$PWD/scripts/tsan_suppressions.txt}"
-ctest --test-dir "$dir" --output-on-failure -j "${MOSLAM_JOBS:-$(nproc)}"
+# The ThreadSanitizer build runs the tests whose code runs in several threads (label `threads`).
+labels=()
+[[ "$kind" == tsan ]] && labels=(-L threads)
+ctest --test-dir "$dir" --output-on-failure -j "${MOSLAM_JOBS:-$(nproc)}" "${labels[@]}"

@@ -176,12 +176,13 @@ void WriteFramesCsv(const RunResult& result, const std::string& path) {
     const slam::FrameReport& r = f.report;
     out += fmt::format(
         "{},{:.6f},{},{},{},{},{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.3f},{:.3f}"
-        ",{},{},{},{:.3f},{},{:.4f}\n",
+        ",{},{},{},{:.3f},{},{:.4f},{},{},{:.1f}\n",
         f.index, f.timestamp, StateName(r.state), CsvField(r.reason), r.num_features, r.num_matches,
         r.num_inliers, r.new_keyframe ? 1 : 0, r.times.extract_ms, r.times.track_ms,
         r.times.local_map_ms, r.times.keyframe_ms, r.times.total_ms, f.mask_ms, f.mask_fraction,
         f.network_ms, f.crf_ms, r.relocalized ? 1 : 0, r.recovered ? 1 : 0, f.segmented ? 1 : 0,
-        r.times.mask_ms, r.movable_points_erased, r.moving_region_fraction);
+        r.times.mask_ms, r.movable_points_erased, r.moving_region_fraction, r.map_keyframes,
+        r.map_points, f.rss_mb);
   }
   WriteFileAtomically(path, out, "per-frame log");
 }

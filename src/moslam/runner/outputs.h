@@ -31,7 +31,8 @@ namespace moslam::runner {
 inline constexpr const char* kFramesCsvHeader =
     "index,timestamp,state,reason,features,matches,inliers,keyframe,extract_ms,track_ms,"
     "local_map_ms,keyframe_ms,total_ms,mask_ms,mask_fraction,seg_ms,crf_ms,relocalized,recovered,"
-    "segmented,movable_mask_ms,movable_erased,moving_region_fraction";
+    "segmented,movable_mask_ms,movable_erased,moving_region_fraction,map_keyframes,map_points,"
+    "rss_mb";
 
 // Writers; InputError naming the file when it cannot be written.
 void WriteOrbSlamTum(const eval::Trajectory& trajectory, int pose_decimals,

@@ -11,6 +11,7 @@
 #include "moslam/runner/segmentation_stage.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
+#include "moslam/util/process.h"
 #include "moslam/util/progress.h"
 #include "moslam/util/strings.h"
 
@@ -222,6 +223,7 @@ void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& mas
     record.mask_fraction = frame->mask_fraction;
     record.segmented = due(*frame);
     record.report = TrackFrame(tracker, *frame);
+    record.rss_mb = static_cast<double>(ResidentSetBytes()) / (1 << 20);
     spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,
                   record.timestamp, StateName(record.report.state), record.report.num_features,
                   record.report.num_inliers, record.report.times.total_ms);

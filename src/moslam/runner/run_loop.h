@@ -76,6 +76,7 @@ struct FrameRecord {
   double crf_ms = 0.0;      // of mask_ms: the CRF
   double mask_fraction = 0.0;
   bool segmented = true;  // the mask source ran on this frame (RunOptions::segment_every)
+  double rss_mb = 0.0;    // the process's resident memory after this frame (MiB; 0: unknown)
 };
 
 struct RunResult {

@@ -89,8 +89,13 @@ TEST(RunLoopTest, TumRunWritesEveryOutputInItsFormat) {
   const auto csv = Lines((dir / "frames.csv").string());
   ASSERT_EQ(csv.size(), 7u);
   EXPECT_EQ(csv[0], kFramesCsvHeader);
-  EXPECT_EQ(SplitFields(csv[0], true).size(), 23u);
-  EXPECT_EQ(std::count(csv[1].begin(), csv[1].end(), ','), 22);  // as many fields as the header
+  EXPECT_EQ(SplitFields(csv[0], true).size(), 26u);
+  EXPECT_EQ(std::count(csv[1].begin(), csv[1].end(), ','), 25);  // as many fields as the header
+  // The last column: the process's resident memory after the frame, MiB (a test binary holds
+  // more than 1 MiB and less than 64 GiB).
+  const double rss_mb = std::stod(csv[1].substr(csv[1].rfind(',') + 1));
+  EXPECT_GT(rss_mb, 1.0);
+  EXPECT_LT(rss_mb, 65536.0);
   EXPECT_THAT(csv[1], ::testing::StartsWith("0," + test::Stamp(0) + ",ok,,100,80,60,1,1.000,"));
   EXPECT_THAT(csv[4], HasSubstr(",lost,\"too few matches, said the fake\",103,"));
   // Summary with the ATE against groundtruth.txt: the fake reports the true poses.

@@ -25,26 +25,6 @@
 namespace moslam::slam {
 namespace {
 
-// Every `step`-th frame's ORB descriptors, as the tracker extracts them.
-std::shared_ptr<const vocab::Vocabulary> TrainVocabulary(const std::string& folder, int step) {
-  const io::Sequence sequence = io::ReadDataset(folder);
-  const io::OrbSlamSettings settings =
-      io::LoadOrbSlamSettings(folder + "/settings.yaml", sequence.sensor);
-  feature::OrbExtractorOptions orb;
-  orb.ApplySettings(settings.orb);
-  feature::OrbExtractor extractor(orb);
-  std::vector<cv::Mat> descriptors;
-  for (size_t i = 0; i < sequence.size(); i += static_cast<size_t>(step)) {
-    const io::FrameImages images =
-        io::LoadFrameImages(sequence.frames[i], io::ColourMode::kGrey, settings.depth_map_factor);
-    descriptors.push_back(extractor.Extract(images.left).descriptors);
-  }
-  vocab::VocabularyTrainOptions options;
-  options.k = 10;
-  options.levels = 3;  // 1000 words: enough to tell the walls of one room apart
-  return std::make_shared<const vocab::Vocabulary>(vocab::Vocabulary::Train(descriptors, options));
-}
-
 // Position error of the last pose after aligning the first estimated pose onto the first ground
 // truth pose: how far the camera believes it is from where it is after the whole walk.
 double EndPointDrift(const std::string& groundtruth, const eval::Trajectory& estimate) {

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <functional>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -17,12 +18,36 @@
 #include "moslam/eval/ate.h"
 #include "moslam/eval/statistics.h"
 #include "moslam/eval/trajectory_io.h"
+#include "moslam/feature/orb_extractor.h"
 #include "moslam/io/dataset.h"
 #include "moslam/io/image.h"
 #include "moslam/io/orbslam_settings.h"
 #include "moslam/slam/system.h"
+#include "moslam/vocab/vocabulary.h"
 
 namespace moslam::slam {
+
+// A small vocabulary (10^3 words) trained on every `step`-th frame's ORB descriptors of the
+// data set, as the tracker extracts them: tests need no shipped vocabulary file.
+inline std::shared_ptr<const vocab::Vocabulary> TrainVocabulary(const std::string& folder,
+                                                                int step) {
+  const io::Sequence sequence = io::ReadDataset(folder);
+  const io::OrbSlamSettings settings =
+      io::LoadOrbSlamSettings(folder + "/settings.yaml", sequence.sensor);
+  feature::OrbExtractorOptions orb;
+  orb.ApplySettings(settings.orb);
+  feature::OrbExtractor extractor(orb);
+  std::vector<cv::Mat> descriptors;
+  for (size_t i = 0; i < sequence.size(); i += static_cast<size_t>(step)) {
+    const io::FrameImages images =
+        io::LoadFrameImages(sequence.frames[i], io::ColourMode::kGrey, settings.depth_map_factor);
+    descriptors.push_back(extractor.Extract(images.left).descriptors);
+  }
+  vocab::VocabularyTrainOptions options;
+  options.k = 10;
+  options.levels = 3;  // 1000 words: enough to tell the walls of one room apart
+  return std::make_shared<const vocab::Vocabulary>(vocab::Vocabulary::Train(descriptors, options));
+}
 
 inline std::string MaskPath(const io::FrameEntry& entry, const std::string& mask_folder) {
   std::string path = entry.image_left;

@@ -261,6 +261,11 @@ class System::Impl : public KeyFrameSink {
         report.T_world_cam = outcome.T_cam_world.Inverse();
         break;
     }
+    {
+      std::lock_guard<std::mutex> lock(map_.mutex());
+      report.map_keyframes = static_cast<int>(map_.keyframes().size());
+      report.map_points = static_cast<int>(map_.points().size());
+    }
     report.times.total_ms = MsSince(t0);
     return report;
   }

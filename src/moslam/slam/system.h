@@ -163,6 +163,10 @@ struct FrameReport {
   float moving_region_fraction = 0.0f;  // share of the image the geometric regions cover
   StageTimes times;
   std::optional<geometry::SE3> T_world_cam;  // when tracking is ok (or just initialized)
+  // The map's size after this frame (erased keyframes and points are gone from it): over a long
+  // run, whether the map levels off once the place is mapped (frames.csv, docs/ROBUSTNESS.md).
+  int map_keyframes = 0;
+  int map_points = 0;
 };
 
 struct MapSummary {
