@@ -25,6 +25,10 @@ function(moslam_test module name)
   endif()
   cmake_parse_arguments(ARG "THREADS" "SHARDS;COST" "SOURCES;DEPS" ${ARGN})
   set(target test_${module}_${name})
+  if(MOSLAM_SANITIZE STREQUAL "thread")
+    # OpenCV's loops in the calling thread (src/moslam/testing/serial_opencv.cc says why).
+    list(APPEND ARG_SOURCES ${PROJECT_SOURCE_DIR}/src/moslam/testing/serial_opencv.cc)
+  endif()
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} moslam::testing GTest::gtest GTest::gmock
                                           GTest::gtest_main)

@@ -107,8 +107,12 @@ void ParseMapBody(const std::string& path, const std::string&) {
   mapio::ParseMap(bytes + body, path, FuzzMapIdentity(), &map);
 }
 
-std::string ScratchFolder() {
-  static const std::string folder = [] {
+// The scratch folder of this process, removed by its destructor at exit (libFuzzer ends with
+// exit()). Not an atexit handler: one registered while the static is built runs after the
+// static is destroyed (the fuzzers' first finding was that use after free).
+class Scratch {
+ public:
+  Scratch() {
     const char* tmp = std::getenv("TMPDIR");
     const fs::path root = fs::path(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") /
                           ("moslam_fuzz_" + std::to_string(getpid()));
@@ -119,13 +123,23 @@ std::string ScratchFolder() {
     for (const char* model : {"model.onnx", "model.mnet", "model.weights", "model.cfg"}) {
       std::ofstream(root / model) << "x";
     }
-    std::atexit([] {
-      std::error_code ec;
-      fs::remove_all(fs::path(ScratchFolder()), ec);
-    });
-    return root.string();
-  }();
-  return folder;
+    path_ = root.string();
+  }
+  ~Scratch() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  Scratch(const Scratch&) = delete;
+  Scratch& operator=(const Scratch&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+const std::string& ScratchFolder() {
+  static const Scratch scratch;
+  return scratch.path();
 }
 
 }  // namespace

@@ -46,6 +46,6 @@ for t in "${targets[@]}"; do
     status=1
   fi
   grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb" "$dir/logs/$t.log" |
-    sed "s/^/fuzz.sh: $t /" || true
+    sort -u | sed "s/^/fuzz.sh: $t /" || true
 done
 exit $status

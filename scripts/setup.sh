@@ -17,6 +17,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # the bad-input corpus (tools/bad_input_corpus, docs/ROBUSTNESS.md): images and .npy files
   python3-numpy python3-opencv
+  # the parsers' fuzzers (scripts/fuzz.sh): clang and its libFuzzer and sanitizer runtimes
+  clang libclang-rt-14-dev
 )
 
 missing=()
