@@ -52,10 +52,11 @@ class SystemThreads : public ::testing::Test {
 
 TEST_F(SystemThreads, RgbdClosesTheLoopWithEveryThreadOn) {
   const DatasetRun run = Run(0);
-  std::printf("loop_room seed 3, %zu frames, threaded: %d keyframes, %d loops closed, %d global "
-              "BA merged, ATE RMSE %.4f m\n",
-              run.reports.size(), run.summary.keyframes, run.summary.loops_closed,
-              run.summary.global_ba_merged, run.ate_rmse);
+  std::printf(
+      "loop_room seed 3, %zu frames, threaded: %d keyframes, %d loops closed, %d global "
+      "BA merged, ATE RMSE %.4f m\n",
+      run.reports.size(), run.summary.keyframes, run.summary.loops_closed,
+      run.summary.global_ba_merged, run.ate_rmse);
   ASSERT_EQ(run.reports.size(), static_cast<size_t>(kFrames));
   // Seed 3 starts facing a close shelf with too few depth points for a map: initialized at frame
   // 10 (as deterministic runs); from then on every frame is tracked.
