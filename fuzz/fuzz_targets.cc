@@ -36,8 +36,8 @@ namespace {
 void ParseSettings(const std::string& path, const std::string&) {
   int accepted = 0;
   std::string first_error;
-  for (const auto sensor : {io::SensorType::kMonocular, io::SensorType::kStereo,
-                            io::SensorType::kRgbD}) {
+  for (const auto sensor :
+       {io::SensorType::kMonocular, io::SensorType::kStereo, io::SensorType::kRgbD}) {
     try {
       io::LoadOrbSlamSettings(path, sensor);
       ++accepted;
