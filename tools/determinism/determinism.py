@@ -8,7 +8,8 @@ so every threaded part of the pipeline is in the loop.
     /usr/bin/python3 tools/determinism/determinism.py --moslam build/apps/moslam/moslam [--work DIR]
 
 Compared: CameraTrajectory.txt and KeyFrameTrajectory.txt byte for byte, and frames.csv with its
-time columns left out (states, feature, match and inlier counts, keyframes, mask fractions).
+time and memory columns left out (states, feature, match and inlier counts, keyframes, mask
+fractions, map sizes).
 Exit 0: all identical; 1: a difference (the first differing line is printed); 77: skipped."""
 
 import argparse
@@ -65,10 +66,11 @@ def run(moslam, tum, card, out, env_extra):
 
 
 def untimed_frames(path):
-    """frames.csv without its time columns, as text."""
+    """frames.csv without its time and memory columns (`*_ms`, `rss_mb`: the machine's, not the
+    run's), as text."""
     with open(path) as f:
         rows = list(csv.reader(f))
-    keep = [i for i, name in enumerate(rows[0]) if not name.endswith("_ms")]
+    keep = [i for i, name in enumerate(rows[0]) if not name.endswith("_ms") and name != "rss_mb"]
     text = io.StringIO()
     csv.writer(text).writerows([[row[i] for i in keep] for row in rows])
     return text.getvalue()
