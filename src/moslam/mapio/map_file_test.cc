@@ -3,9 +3,12 @@
 #include "moslam/mapio/map_file.h"
 
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <sstream>
 #include <string>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "moslam/mapio/test_map.h"
@@ -228,6 +231,31 @@ TEST_F(MapFileTest, InconsistentBodyBehindAGoodChecksum) {
   EXPECT_NE(e.find("bad.map: a loop edge between keyframes not in the map at byte"),
             std::string::npos)
       << e;
+}
+
+// Values a writer never produces, behind a good checksum: each an error naming the file, where
+// before (the map fuzzer's finding, fuzz/regressions/map/) infinite image bounds reached the
+// keypoint grid, which cast a NaN cell to int.
+TEST_F(MapFileTest, NonFiniteValuesAreRefused) {
+  const auto edited = [](const std::function<void(feature::Frame*)>& frame,
+                         const std::function<void(map::Map*)>& points = {}) {
+    map::Map map;
+    testing::BuildTestMap(3, 40, 7, &map, frame);
+    if (points) points(&map);
+    return ParseError(Serialized(map));
+  };
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THAT(edited([&](feature::Frame* f) { f->bounds.min_y = -inf; }),
+              ::testing::HasSubstr("bad.map: empty or non-finite image bounds"));
+  EXPECT_THAT(edited([&](feature::Frame* f) { f->keypoints[3].angle = nan; }),
+              ::testing::HasSubstr("non-finite position, size, angle or response"));
+  EXPECT_THAT(edited([&](feature::Frame* f) { f->depth[2] = nan; }),
+              ::testing::HasSubstr("non-finite keypoint depth"));
+  EXPECT_THAT(edited([&](feature::Frame* f) { f->scale_factors[1] = 0.0f; }),
+              ::testing::HasSubstr("scale pyramid value"));
+  EXPECT_THAT(edited({}, [&](map::Map* m) { m->points().begin()->second->max_distance = nan; }),
+              ::testing::HasSubstr("scale-invariance range"));
 }
 
 TEST_F(MapFileTest, MissingFileAndDirectory) {

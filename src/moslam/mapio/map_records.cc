@@ -1,5 +1,6 @@
 #include "moslam/mapio/map_records.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -38,8 +39,11 @@ std::vector<cv::KeyPoint> ReadKeyPoints(Reader* in, size_t n, int num_levels) {
     keypoints[k] = cv::KeyPoint(f[5 * k], f[5 * k + 1], f[5 * k + 2], f[5 * k + 3], f[5 * k + 4],
                                 i[2 * k], i[2 * k + 1]);
     if (i[2 * k] < 0 || i[2 * k] >= num_levels) in->Fail("a keypoint octave out of range");
-    if (!std::isfinite(f[5 * k]) || !std::isfinite(f[5 * k + 1])) {
-      in->Fail("a keypoint at a non-finite position");
+    // Position, size, angle and response: the matchers bin angles and grid cells by casting
+    // them to int, which a NaN or an infinity turns into undefined behaviour.
+    if (!std::all_of(f.begin() + 5 * k, f.begin() + 5 * k + 5,
+                     [](float v) { return std::isfinite(v); })) {
+      in->Fail("a keypoint with a non-finite position, size, angle or response");
     }
   }
   return keypoints;
@@ -84,6 +88,13 @@ feature::Frame ReadFrame(Reader* in) {
       frame.level_sigma2.size() != levels || frame.inv_level_sigma2.size() != levels) {
     in->Fail("scale pyramid arrays empty or of different lengths");
   }
+  for (const auto* pyramid : {&frame.scale_factors, &frame.inv_scale_factors, &frame.level_sigma2,
+                              &frame.inv_level_sigma2}) {
+    if (!std::all_of(pyramid->begin(), pyramid->end(),
+                     [](float v) { return std::isfinite(v) && v > 0.0f; })) {
+      in->Fail("a scale pyramid value that is not a positive finite number");
+    }
+  }
   frame.keypoints = ReadKeyPoints(in, n, static_cast<int>(levels));
   frame.keypoints_undistorted = ReadKeyPoints(in, n, static_cast<int>(levels));
   const auto descriptors = in->Vector<uint8_t>();
@@ -99,14 +110,26 @@ feature::Frame ReadFrame(Reader* in) {
       (!frame.moving.empty() && frame.moving.size() != n)) {
     in->Fail("per-keypoint arrays of the wrong length");
   }
+  // Depth and right coordinate: a measured value or negative for none; never NaN or infinite.
+  const auto finite = [](float v) { return std::isfinite(v); };
+  if (!std::all_of(frame.u_right.begin(), frame.u_right.end(), finite) ||
+      !std::all_of(frame.depth.begin(), frame.depth.end(), finite)) {
+    in->Fail("a non-finite keypoint depth or right coordinate");
+  }
   frame.bf = in->Value<double>();
   frame.bounds.min_x = in->Value<float>();
   frame.bounds.max_x = in->Value<float>();
   frame.bounds.min_y = in->Value<float>();
   frame.bounds.max_y = in->Value<float>();
-  // The grid is not stored: it is a function of the bounds and the keypoints.
-  if (!(frame.bounds.max_x > frame.bounds.min_x && frame.bounds.max_y > frame.bounds.min_y)) {
-    in->Fail("empty image bounds");
+  if (!std::isfinite(frame.timestamp) || !std::isfinite(frame.bf)) {
+    in->Fail("a non-finite timestamp or stereo baseline");
+  }
+  // The grid is not stored: it is a function of the bounds and the keypoints. Infinite bounds
+  // (a fuzzer's finding) made its cell of a keypoint NaN, cast to int.
+  const feature::ImageBounds& b = frame.bounds;
+  if (!(std::isfinite(b.min_x) && std::isfinite(b.max_x) && std::isfinite(b.min_y) &&
+        std::isfinite(b.max_y) && b.max_x > b.min_x && b.max_y > b.min_y)) {
+    in->Fail("empty or non-finite image bounds");
   }
   frame.grid = feature::KeypointGrid(frame.bounds, frame.keypoints_undistorted);
   return frame;
@@ -244,6 +267,11 @@ void ReadPoint(Reader* in, map::Map* map) {
   }
   const float min_distance = in->Value<float>();
   const float max_distance = in->Value<float>();
+  // The scale prediction takes a logarithm of their ratio to a distance and casts it to a level.
+  if (!(std::isfinite(min_distance) && std::isfinite(max_distance) && min_distance >= 0.0f &&
+        min_distance <= max_distance)) {
+    in->Fail("a scale-invariance range that is not 0 <= min <= max, finite");
+  }
   const auto descriptor = in->Vector<uint8_t>();
   if (!descriptor.empty() && descriptor.size() != kDescriptorBytes)
     in->Fail("a descriptor not of 32 bytes");

@@ -46,14 +46,18 @@ inline feature::Frame RandomFrame(int n, double timestamp, std::mt19937* rng) {
 }
 
 // `keyframes` keyframes of `features` keypoints; a third of each keyframe's keypoints seed points
-// seen by it and its next two keyframes.
-inline void BuildTestMap(int keyframes, int features, uint32_t seed, map::Map* map) {
+// seen by it and its next two keyframes. `edit_frame` (optional) changes each keyframe's frame
+// before it enters the map (tests of values a writer never produces).
+inline void BuildTestMap(int keyframes, int features, uint32_t seed, map::Map* map,
+                         const std::function<void(feature::Frame*)>& edit_frame = {}) {
   std::mt19937 rng(seed);
   std::lock_guard<std::mutex> lock(map->mutex());
   std::vector<std::shared_ptr<map::KeyFrame>> kfs;
   for (int k = 0; k < keyframes; ++k) {
     const Eigen::Quaterniond q(Eigen::AngleAxisd(0.01 * k, Eigen::Vector3d::UnitY()));
-    auto kf = map->CreateKeyFrame(RandomFrame(features, 0.1 * k, &rng),
+    feature::Frame frame = RandomFrame(features, 0.1 * k, &rng);
+    if (edit_frame) edit_frame(&frame);
+    auto kf = map->CreateKeyFrame(std::move(frame),
                                   geometry::SE3(q, Eigen::Vector3d(-0.1 * k, 0.0, 0.0)));
     std::uniform_int_distribution<uint32_t> word(0, 9999), node(0, 99);
     for (int w = 0; w < 300; ++w) kf->bow[word(rng)] = 1.0 / 300.0;
