@@ -5,6 +5,9 @@
       renders the loop_room preset (a 1 m circle, one lap every 240 frames) for --frames frames
       into DIR/loop_room_<seed> unless it is there, runs `moslam run` on it with every thread on
       (DIR/run_<seed>), then plots as below
+  long_run.py self-test
+      plots a made-up frames.csv (memory rising, then flat) and checks the picture and the
+      plateau figures (ctest tools/long_run_selftest)
   long_run.py plot FRAMES_CSV OUT.png [--title T]
       draws resident memory (MiB), map keyframes and map points against the frame index from a
       run's frames.csv (columns rss_mb, map_keyframes, map_points) and prints the plateau
@@ -19,8 +22,13 @@ import os
 import subprocess
 import sys
 
-import cv2
-import numpy as np
+try:
+    import cv2
+    import numpy as np
+except ImportError:
+    print("long_run: skipped: Debian's python3-numpy and python3-opencv are needed "
+          "(run with /usr/bin/python3)")
+    sys.exit(77)
 
 
 def read_columns(path, names):
@@ -68,10 +76,15 @@ def draw_panel(img, box, x, y, label, colour):
     cv2.putText(img, label, (left + 10, top + 22), font, 0.6, colour, 2, cv2.LINE_AA)
 
 
-def plateau(index, values, name, unit):
+def tenths_and_growth(values):
+    """The mean over each tenth of the run, and the growth from the sixth tenth to the last."""
     n = len(values)
     tenths = [values[k * n // 10:(k + 1) * n // 10].mean() for k in range(10)]
-    growth = tenths[9] - tenths[5]
+    return tenths, tenths[9] - tenths[5]
+
+
+def plateau(index, values, name, unit):
+    tenths, growth = tenths_and_growth(values)
     print(f"{name}: per tenth of the run " + " ".join(f"{t:.0f}" for t in tenths) + f" {unit}; "
           f"last tenth {tenths[9]:.1f} {unit}, growth over the second half {growth:+.1f} {unit} "
           f"({growth / max(tenths[5], 1e-9) * 100:+.1f} %), maximum {values.max():.1f} {unit} "
@@ -101,6 +114,40 @@ def plot(frames_csv, out, title):
     plateau(index, columns["map_points"], "map points", "")
 
 
+def self_test():
+    """A made-up run: memory and map grow over the first 2000 frames, then stay flat."""
+    import tempfile
+    frames = 5000
+    index = np.arange(frames)
+    rise = np.minimum(index / 2000.0, 1.0)
+    columns = {"rss_mb": 200 + 100 * rise, "map_keyframes": np.round(80 * rise),
+               "map_points": np.round(7000 * rise)}
+    tenths, growth = tenths_and_growth(columns["rss_mb"])
+    failures = []
+    if abs(tenths[9] - 300.0) > 1e-9 or abs(growth) > 1e-9:
+        failures.append(f"plateau of the flat half: last tenth {tenths[9]}, growth {growth}")
+    if not tenths[0] < tenths[1] < tenths[3]:
+        failures.append(f"the rise is not in the first tenths: {tenths[:4]}")
+    with tempfile.TemporaryDirectory() as work:
+        csv_path = os.path.join(work, "frames.csv")
+        with open(csv_path, "w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(["index", "state"] + list(columns))
+            for i in index:
+                writer.writerow([i, "ok"] + [columns[c][i] for c in columns])
+        png = os.path.join(work, "memory.png")
+        plot(csv_path, png, "self-test")
+        img = cv2.imread(png)
+        if img is None or img.shape[:2] != (900, 1200):
+            failures.append(f"{png}: not a 1200x900 picture")
+        elif (img < 128).mean() < 0.005:
+            failures.append("the picture is nearly blank")
+    for failure in failures:
+        print("FAILED", failure)
+    print(f"long_run self-test: {'ok' if not failures else 'FAILED'}")
+    return 1 if failures else 0
+
+
 def run(args):
     data = os.path.join(args.work, f"loop_room_{args.seed}")
     if not os.path.exists(os.path.join(data, "groundtruth.txt")):
@@ -121,6 +168,7 @@ def main():
     r.add_argument("--work", required=True)
     r.add_argument("--frames", type=int, default=10000)
     r.add_argument("--seed", type=int, default=4)
+    sub.add_parser("self-test")
     p = sub.add_parser("plot")
     p.add_argument("frames_csv")
     p.add_argument("out")
@@ -128,6 +176,8 @@ def main():
     args = parser.parse_args()
     if args.command == "run":
         run(args)
+    elif args.command == "self-test":
+        sys.exit(self_test())
     else:
         plot(args.frames_csv, args.out, args.title)
 
