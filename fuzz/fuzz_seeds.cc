@@ -93,7 +93,7 @@ int WriteMapBody(const fs::path& dir) {
     std::lock_guard<std::mutex> lock(map.mutex());
     bytes = mapio::SerializeMap(map, FuzzMapIdentity());
   }
-  Write(dir / "small.map", bytes.substr(24));  // the fixed 24-byte prefix: docs/MAP_FORMAT.md
+  Write(dir / "small.map", bytes.substr(mapio::kMapPrefixBytes));  // the harness seals it
   return 1;
 }
 

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 
 #include "moslam/eval/trajectory_io.h"
 #include "moslam/io/kitti.h"
@@ -14,7 +15,6 @@
 #include "moslam/mapio/map_file.h"
 #include "moslam/semantic/model_card.h"
 #include "moslam/util/check.h"
-#include "moslam/util/crc32.h"
 #include "moslam/util/error.h"
 #include "moslam/vocab/vocabulary.h"
 
@@ -32,20 +32,27 @@ mapio::MapIdentity FuzzMapIdentity() {
 
 namespace {
 
-// Every sensor: each reads other keys (Camera.bf, DepthMapFactor, ThDepth).
-void ParseSettings(const std::string& path, const std::string&) {
-  int accepted = 0;
+// Calls `read` with each of `ways` (every way must run: each reaches other code); throws the
+// first InputError when none accepted the file.
+template <typename Way, typename Read>
+void AcceptedByAny(std::initializer_list<Way> ways, const Read& read) {
+  bool accepted = false;
   std::string first_error;
-  for (const auto sensor :
-       {io::SensorType::kMonocular, io::SensorType::kStereo, io::SensorType::kRgbD}) {
+  for (const Way way : ways) {
     try {
-      io::LoadOrbSlamSettings(path, sensor);
-      ++accepted;
+      read(way);
+      accepted = true;
     } catch (const InputError& e) {
       if (first_error.empty()) first_error = e.what();
     }
   }
-  if (accepted == 0) throw InputError(first_error);
+  if (!accepted) throw InputError(first_error);
+}
+
+// Every sensor: each reads other keys (Camera.bf, DepthMapFactor, ThDepth).
+void ParseSettings(const std::string& path, const std::string&) {
+  AcceptedByAny({io::SensorType::kMonocular, io::SensorType::kStereo, io::SensorType::kRgbD},
+                [&](io::SensorType sensor) { io::LoadOrbSlamSettings(path, sensor); });
 }
 
 void ParseTumList(const std::string& path, const std::string&) { io::ReadTumFileList(path); }
@@ -63,22 +70,14 @@ void ParseKittiTimes(const std::string& path, const std::string&) { eval::ReadTi
 
 // Detection, then every format explicitly (a file may be read as any of them by `--format`).
 void ParseTrajectory(const std::string& path, const std::string&) {
-  int accepted = 0;
-  std::string first_error;
-  for (const auto format : {eval::TrajectoryFormat::kAuto, eval::TrajectoryFormat::kTum,
-                            eval::TrajectoryFormat::kKitti, eval::TrajectoryFormat::kEuroc}) {
-    try {
-      eval::ReadTrajectory(path, format);
-      ++accepted;
-    } catch (const InputError& e) {
-      if (first_error.empty()) first_error = e.what();
-    }
-  }
-  if (accepted == 0) throw InputError(first_error);
+  AcceptedByAny({eval::TrajectoryFormat::kAuto, eval::TrajectoryFormat::kTum,
+                 eval::TrajectoryFormat::kKitti, eval::TrajectoryFormat::kEuroc},
+                [&](eval::TrajectoryFormat format) { eval::ReadTrajectory(path, format); });
 }
 
 // Model files are looked up next to the card, then in `folder` as the shared root: the scratch
-// folder holds a file `model.onnx`, so that cards naming it get past the lookup.
+// folder holds stand-ins (model.onnx, .mnet, .weights, .cfg), so that cards naming them get past
+// the lookup.
 void ParseModelCard(const std::string& path, const std::string& folder) {
   semantic::LoadModelCard(path, folder);
 }
@@ -96,15 +95,8 @@ void ParseVocabulary(const std::string& path, const std::string&) {
 void ParseMapBody(const std::string& path, const std::string&) {
   std::ifstream file(path, std::ios::binary);
   const std::string body((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  std::string bytes(mapio::kMapMagic, sizeof mapio::kMapMagic);
-  const auto put = [&bytes](uint64_t v, int n) {
-    for (int k = 0; k < n; ++k) bytes.push_back(static_cast<char>((v >> (8 * k)) & 0xffu));
-  };
-  put(mapio::kMapFormatVersion, 4);
-  put(Crc32(body.data(), body.size()), 4);
-  put(body.size(), 8);
   map::Map map;  // owned alone: ParseMap needs no lock
-  mapio::ParseMap(bytes + body, path, FuzzMapIdentity(), &map);
+  mapio::ParseMap(mapio::SealMapBody(body), path, FuzzMapIdentity(), &map);
 }
 
 // The scratch folder of this process, removed by its destructor at exit (libFuzzer ends with

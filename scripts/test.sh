@@ -17,6 +17,7 @@ export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 # Suppressions for reports inside system libraries (each file says which and why).
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/scripts/lsan_suppressions.txt}"
 export TSAN_OPTIONS="${TSAN_OPTIONS:-suppressions=$PWD/scripts/tsan_suppressions.txt}"
+labels=()
 if [[ "$kind" == tsan ]]; then
   # Mesa's llvmpipe (the synthetic scenes' renderer) rasterizes in worker threads of its own;
   # libOSMesa is not built with ThreadSanitizer, so its hand-overs are invisible to it and a
@@ -25,8 +26,7 @@ if [[ "$kind" == tsan ]]; then
   # threads moslam starts, which are what this build checks. OpenCV's TBB workers: the same, in
   # src/moslam/testing/serial_opencv.cc.
   export LP_NUM_THREADS=0
+  # It runs the tests whose code runs in several threads (label `threads`) only.
+  labels=(-L threads)
 fi
-# The ThreadSanitizer build runs the tests whose code runs in several threads (label `threads`).
-labels=()
-[[ "$kind" == tsan ]] && labels=(-L threads)
 ctest --test-dir "$dir" --output-on-failure -j "${MOSLAM_JOBS:-$(nproc)}" "${labels[@]}"

@@ -72,13 +72,17 @@ TEST(Covisibility, EraseKeyFrameReconnectsChildrenAndDropsOrphans) {
   SharePoints(&map, {k1, k2}, 20, 30);
   for (auto& kf : {k0, k1, k2}) kf->UpdateConnections();
   ASSERT_EQ(map.points().size(), 50u);
+  EXPECT_EQ(map.num_keyframes(), 3u);  // the counts read without the lock follow every change
+  EXPECT_EQ(map.num_points(), 50u);
   map.EraseKeyFrame(k1);
+  EXPECT_EQ(map.num_keyframes(), 2u);
   EXPECT_TRUE(k1->bad());
   EXPECT_EQ(map.keyframes().count(k1->id), 0u);
   EXPECT_EQ(k2->parent(), k0);
   EXPECT_EQ(k2->Weight(k1->id), 0);
   // The 30 points seen only by k1 and k2 (monocular: 1 observation left) are erased.
   EXPECT_EQ(map.points().size(), 20u);
+  EXPECT_EQ(map.num_points(), 20u);
   for (int i = 20; i < 50; ++i) EXPECT_EQ(k2->points[i], nullptr);
   // The first keyframe is never erased.
   map.EraseKeyFrame(k0);
@@ -103,6 +107,7 @@ TEST(Covisibility, ReplaceMovesObservations) {
   EXPECT_EQ(b->IndexIn(k0->id), 3);
   EXPECT_EQ(b->num_observations(), 4);  // two stereo observations
   EXPECT_EQ(map.points().count(a->id), 0u);
+  EXPECT_EQ(map.num_points(), 1u);
 }
 
 TEST(MapPoint, DescriptorIsTheMedoidAndScaleRangeFollowsTheReference) {

@@ -11,6 +11,7 @@ std::shared_ptr<KeyFrame> Map::CreateKeyFrame(feature::Frame frame,
                                               const geometry::SE3& T_cam_world) {
   auto kf = std::make_shared<KeyFrame>(next_keyframe_id_++, std::move(frame), T_cam_world);
   keyframes_[kf->id] = kf;
+  CountEntities();
   return kf;
 }
 
@@ -18,6 +19,7 @@ std::shared_ptr<MapPoint> Map::CreateMapPoint(const Eigen::Vector3d& position,
                                               const std::shared_ptr<KeyFrame>& reference) {
   auto p = std::make_shared<MapPoint>(next_point_id_++, position, reference, reference->id);
   points_[p->id] = p;
+  CountEntities();
   return p;
 }
 
@@ -31,12 +33,14 @@ void Map::EraseMapPoint(const std::shared_ptr<MapPoint>& point) {
     }
   }
   points_.erase(point->id);
+  CountEntities();
 }
 
 void Map::EraseKeyFrame(const std::shared_ptr<KeyFrame>& keyframe) {
   if (!keyframe || !keyframe->parent()) return;  // the first keyframe stays
   for (const auto& p : keyframe->SetBad(keyframes_)) EraseMapPoint(p);
   keyframes_.erase(keyframe->id);
+  CountEntities();
   if (erase_listener_) erase_listener_(*keyframe);
 }
 
@@ -60,6 +64,7 @@ void Map::Replace(const std::shared_ptr<MapPoint>& old_point,
   old_point->replaced_by = new_point;
   old_point->bad = true;
   points_.erase(old_point->id);
+  CountEntities();
 }
 
 std::shared_ptr<KeyFrame> Map::RestoreKeyFrame(uint64_t id, feature::Frame frame,
@@ -67,6 +72,7 @@ std::shared_ptr<KeyFrame> Map::RestoreKeyFrame(uint64_t id, feature::Frame frame
   MOSLAM_CHECK(keyframes_.count(id) == 0) << "keyframe " << id << " restored twice";
   auto kf = std::make_shared<KeyFrame>(id, std::move(frame), T_cam_world);
   keyframes_[id] = kf;
+  CountEntities();
   next_keyframe_id_ = std::max(next_keyframe_id_, id + 1);
   return kf;
 }
@@ -77,6 +83,7 @@ std::shared_ptr<MapPoint> Map::RestoreMapPoint(uint64_t id, const Eigen::Vector3
   MOSLAM_CHECK(points_.count(id) == 0) << "map point " << id << " restored twice";
   auto p = std::make_shared<MapPoint>(id, position, reference, first_keyframe_id);
   points_[id] = p;
+  CountEntities();
   next_point_id_ = std::max(next_point_id_, id + 1);
   return p;
 }

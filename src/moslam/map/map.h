@@ -19,6 +19,8 @@
 // dropped.
 #pragma once
 
+#include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -83,6 +85,11 @@ class Map {
   const std::map<uint64_t, std::shared_ptr<MapPoint>>& points() const { return points_; }
   std::shared_ptr<KeyFrame> keyframe(uint64_t id) const;
   uint64_t next_keyframe_id() const { return next_keyframe_id_; }
+  // keyframes().size() and points().size() as of the last change, readable without the lock:
+  // the tracking thread reports them after every frame (FrameReport) without waiting for local
+  // mapping to let go of the map.
+  size_t num_keyframes() const { return num_keyframes_.load(std::memory_order_relaxed); }
+  size_t num_points() const { return num_points_.load(std::memory_order_relaxed); }
 
   // Bumped by every global move of poses and points (loop correction, the merge of a global
   // bundle adjustment). A step that copied poses out under an older generation and solved
@@ -95,6 +102,11 @@ class Map {
   mutable std::mutex mutex_;
   std::map<uint64_t, std::shared_ptr<KeyFrame>> keyframes_;
   std::map<uint64_t, std::shared_ptr<MapPoint>> points_;
+  std::atomic<size_t> num_keyframes_{0}, num_points_{0};  // num_keyframes(), num_points()
+  void CountEntities() {
+    num_keyframes_.store(keyframes_.size(), std::memory_order_relaxed);
+    num_points_.store(points_.size(), std::memory_order_relaxed);
+  }
   uint64_t next_keyframe_id_ = 0;
   uint64_t next_point_id_ = 0;
   uint64_t generation_ = 0;

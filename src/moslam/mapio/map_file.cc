@@ -26,7 +26,7 @@ using internal::Writer;
 
 // Fixed little-endian prefix: magic (8), version (u32), CRC-32 of the body (u32), body size
 // (u64); the body follows.
-constexpr size_t kPrefixBytes = 24;
+constexpr size_t kPrefixBytes = kMapPrefixBytes;
 
 void PutLittleEndian(uint64_t v, int bytes, std::string* out) {
   for (int k = 0; k < bytes; ++k) out->push_back(static_cast<char>((v >> (8 * k)) & 0xffu));
@@ -172,12 +172,16 @@ std::string SerializeMap(const map::Map& map, const MapIdentity& identity) {
     if (a < b && map.keyframe(a) && map.keyframe(b)) loops.insert(loops.end(), {a, b});
   }
   body.Vector(loops);
-  const std::string bytes = body.Bytes();
+  return SealMapBody(body.Bytes());
+}
+
+std::string SealMapBody(const std::string& body) {
   std::string out(kMapMagic, sizeof kMapMagic);
   PutLittleEndian(kMapFormatVersion, 4, &out);
-  PutLittleEndian(Crc32(bytes.data(), bytes.size()), 4, &out);
-  PutLittleEndian(bytes.size(), 8, &out);
-  return out + bytes;
+  PutLittleEndian(Crc32(body.data(), body.size()), 4, &out);
+  PutLittleEndian(body.size(), 8, &out);
+  static_assert(sizeof kMapMagic + 4 + 4 + 8 == kPrefixBytes);
+  return out + body;
 }
 
 void SaveMap(const map::Map& map, const MapIdentity& identity, const std::string& path) {

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -29,6 +30,9 @@ namespace moslam::mapio {
 // "MOSLAMAP" then the version; a change of the body's layout bumps the version.
 inline constexpr char kMapMagic[8] = {'M', 'O', 'S', 'L', 'A', 'M', 'A', 'P'};
 inline constexpr uint32_t kMapFormatVersion = 1;
+// The fixed prefix before the body: magic, version (4 bytes), CRC-32 of the body (4), body size
+// (8), little-endian.
+inline constexpr size_t kMapPrefixBytes = 24;
 
 // What a map was made with. A map is loaded only where all of it matches: keyframe descriptors
 // and bag-of-words vectors mean nothing under another vocabulary, poses and depths nothing under
@@ -55,6 +59,9 @@ MapIdentity MakeIdentity(io::SensorType sensor, const io::OrbSlamSettings& setti
 
 // The map's bytes (header and body). Hold map.mutex() while calling.
 std::string SerializeMap(const map::Map& map, const MapIdentity& identity);
+// A map file's bytes from its body: the prefix (magic, version, CRC-32, size) put in front. For
+// tests and fuzzers that change a body and need a file whose checksum matches it.
+std::string SealMapBody(const std::string& body);
 // Writes SerializeMap to `path` through a temporary file in the same folder, renamed over `path`
 // when complete, so a crash never leaves half a map. Takes map.mutex() itself. InputError when
 // the file cannot be written.

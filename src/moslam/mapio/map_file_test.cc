@@ -14,7 +14,6 @@
 #include "moslam/mapio/test_map.h"
 #include "moslam/testing/error_of.h"
 #include "moslam/testing/shared_data.h"
-#include "moslam/util/crc32.h"
 
 namespace moslam::mapio {
 namespace {
@@ -54,13 +53,8 @@ std::string ParseError(const std::string& bytes, const MapIdentity& identity = I
 
 // The body replaced and the header's size and CRC made to match: what a broken writer (not a
 // damaged file) would produce, for the consistency checks behind the checksum.
-std::string Resealed(std::string bytes) {
-  const std::string body = bytes.substr(24);
-  const uint32_t crc = Crc32(body.data(), body.size());
-  for (int k = 0; k < 4; ++k) bytes[12 + k] = static_cast<char>((crc >> (8 * k)) & 0xffu);
-  for (int k = 0; k < 8; ++k)
-    bytes[16 + k] = static_cast<char>((static_cast<uint64_t>(body.size()) >> (8 * k)) & 0xffu);
-  return bytes;
+std::string Resealed(const std::string& bytes) {
+  return SealMapBody(bytes.substr(kMapPrefixBytes));
 }
 
 class MapFileTest : public ::testing::Test {

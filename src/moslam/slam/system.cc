@@ -261,11 +261,8 @@ class System::Impl : public KeyFrameSink {
         report.T_world_cam = outcome.T_cam_world.Inverse();
         break;
     }
-    {
-      std::lock_guard<std::mutex> lock(map_.mutex());
-      report.map_keyframes = static_cast<int>(map_.keyframes().size());
-      report.map_points = static_cast<int>(map_.points().size());
-    }
+    report.map_keyframes = static_cast<int>(map_.num_keyframes());
+    report.map_points = static_cast<int>(map_.num_points());
     report.times.total_ms = MsSince(t0);
     return report;
   }
