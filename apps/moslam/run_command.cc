@@ -64,6 +64,7 @@ struct RunArgs {
   bool no_moving_regions = false;
   bool no_completion_planes = false;
   bool no_pose_consensus = false;
+  bool young_points = false;
   bool no_motion_cross_check = false;
   int mask_margin = slam::SystemOptions{}.mask_margin_px;
   int mask_propagation = slam::SystemOptions{}.mask_propagation_frames;
@@ -162,6 +163,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.moving_regions = !args.no_moving_regions;
   options.completion_structure = !args.no_completion_planes;
   options.pose_consensus = !args.no_pose_consensus;
+  options.young_points = args.young_points;
   options.motion_cross_check = !args.no_motion_cross_check;
   options.mask_margin_px = args.mask_margin;
   options.mask_propagation_frames = args.mask_propagation;
@@ -416,6 +418,10 @@ void AddRunCommand(CLI::App& app) {
                     "Stereo/RGB-D: optimize each frame's pose from all its matches by least "
                     "squares alone, without first finding by counting which of them agree "
                     "(ablations)");
+  command->add_flag("--young-points", args->young_points,
+                    "Stereo/RGB-D: leave recently made map points out of a frame's pose when they "
+                    "fit a pose of their own much better than the long-known points do (an object "
+                    "no network marks, e.g. a pushed cart; off by default)");
   command
       ->add_option("--mask-margin", args->mask_margin,
                    "No new map point within this many pixels of a mask (0: off)")

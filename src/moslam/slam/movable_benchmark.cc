@@ -4,6 +4,7 @@
 // size and at the default half scale), the border flags of 1000 keypoints, judging the local
 // map's points, the static scores of 400 matched points, the mask regions of 120 inconsistent
 // keypoints, the pose optimization with and without weights, the pose consensus of 400 matches,
+// the established-points check of 400 matches,
 // (per keyframe) the moving-keypoint check, and all of them as one frame runs them
 // (BM_MovableAllPerFrame).
 // bench_slam
@@ -24,6 +25,7 @@
 #include "moslam/slam/moving_regions.h"
 #include "moslam/slam/static_scores.h"
 #include "moslam/slam/test_scene.h"
+#include "moslam/slam/young_points.h"
 
 namespace moslam::slam {
 namespace {
@@ -178,6 +180,43 @@ struct PoseConsensusWork {
   }
 };
 
+// The established-points check (young_points.h) of 400 stereo matches, 100 of them young and on an
+// object that moved 3 cm sideways: the worst case, the normal equations of both groups and a pose
+// optimization without the mover (a frame without movers needs only the normal equations).
+struct YoungPointsWork {
+  testing::Scene scene = testing::RandomScene(400, 9);
+  feature::Frame frame;
+  std::vector<size_t> indices;
+  std::vector<double> ages;
+  YoungPointsWork() {
+    frame.scale_factors = {1.0f};
+    frame.level_sigma2 = frame.inv_level_sigma2 = {1.0f};
+    for (size_t i = 0; i < scene.points.size(); ++i) {
+      const bool young = i % 4 == 0;
+      const Eigen::Vector3d x = scene.points[i] + Eigen::Vector3d(young ? 0.03 : 0.0, 0, 0);
+      const cv::KeyPoint kp(static_cast<float>(kModel.fx * x.x() / x.z() + kModel.cx),
+                            static_cast<float>(kModel.fy * x.y() / x.z() + kModel.cy), 31.0f);
+      frame.keypoints.push_back(kp);
+      frame.keypoints_undistorted.push_back(kp);
+      frame.u_right.push_back(static_cast<float>(kp.pt.x - kModel.bf / x.z()));
+      frame.depth.push_back(static_cast<float>(x.z()));
+      indices.push_back(i);
+      ages.push_back(young ? 1.0 : 10.0);
+    }
+    full.inlier.assign(indices.size(), true);
+  }
+  YoungPointCheck check{[] {
+    YoungPointOptions o;
+    o.enabled = true;  // off by default in the system (moslam run --young-points)
+    return o;
+  }()};
+  optim::PoseOptimizerResult full;
+  void Run() const {
+    benchmark::DoNotOptimize(
+        check.Check(kModel, frame, indices, scene.points, ages, full, geometry::SE3()));
+  }
+};
+
 template <typename Work>
 void BM_Work(benchmark::State& state) {
   Work work;
@@ -217,6 +256,7 @@ BENCHMARK_TEMPLATE(BM_Work, StaticScoresWork)
 BENCHMARK_TEMPLATE(BM_Work, MovingRegionsWork)
     ->Name("BM_MovingRegions")
     ->Unit(benchmark::kMillisecond);
+BENCHMARK_TEMPLATE(BM_Work, YoungPointsWork)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_Work, PoseConsensusWork)
     ->Name("BM_PoseConsensus")
     ->Unit(benchmark::kMillisecond);
@@ -233,7 +273,8 @@ BENCHMARK(BM_MovableStructurePlanes)->Unit(benchmark::kMillisecond);
 // Every mechanism of issue 24 as one tracked frame of an RGB-D run with a body in view runs them
 // (the budget is 3 ms): the frame's mask (propagation, structure planes and completion at the
 // default work scale), border flags, judging the
-// local map, static scores, the pose consensus twice (before each pose optimization), the moving
+// local map, static scores, the pose consensus and the established-points check twice (at each
+// pose optimization; the latter is off by default, moslam run --young-points), the moving
 // regions (as if a cluster were found on every frame: the worst case), and the moving-keypoint
 // check on every third frame (a keyframe every 2-4 frames in threaded runs). The weights in
 // the pose optimization add what BM_PoseWithWeights/1 adds over /0.
@@ -245,6 +286,7 @@ void BM_MovableAllPerFrame(benchmark::State& state) {
   PoseConsensusWork consensus;
   MovingRegionsWork regions;
   MovingKeypointsWork keypoints;
+  YoungPointsWork young;
   int frame = 0;
   for (auto _ : state) {
     frame_mask.Run();
@@ -253,6 +295,8 @@ void BM_MovableAllPerFrame(benchmark::State& state) {
     scores.Run();
     consensus.Run();
     consensus.Run();
+    young.Run();
+    young.Run();
     regions.Run();
     if (frame++ % 3 == 0) keypoints.Run();
   }

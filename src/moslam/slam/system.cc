@@ -193,6 +193,7 @@ class System::Impl : public KeyFrameSink {
     t.moving.enabled = o.moving_keypoint_check && o.sensor == io::SensorType::kRgbD;
     t.static_scores.enabled = o.static_scores;
     t.pose_consensus = o.pose_consensus;
+    t.young_points.enabled = o.young_points;
     t.motion_cross_check = o.motion_cross_check;
     t.localization = o.localization;
     return t;

@@ -111,6 +111,11 @@ struct SystemOptions {
   // optimized (optim/pose_consensus.h), so a close moving object cannot take the camera along
   // (moslam run --no-pose-consensus).
   bool pose_consensus = true;
+  // Stereo / RGB-D: young map points that fit a pose of their own much better than the one the
+  // long-known points give are left out of the frame's pose and judged moving
+  // (slam/young_points.h; moslam run --young-points). Off by default: measured on the
+  // unknown mover and a static scene only (docs/EVALUATION.md, "Young points").
+  bool young_points = false;
   // A motion model that keeps few of the last frame's inliers is cross-checked with the
   // reference keyframe (TrackerOptions::motion_cross_check; moslam run --no-motion-cross-check).
   bool motion_cross_check = true;

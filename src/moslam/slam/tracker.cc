@@ -57,7 +57,8 @@ Tracker::Tracker(map::Map* map, const camera::PinholeCamera& camera, double bf,
       model_(CameraModelFor(camera, bf)),
       options_(options),
       sink_(sink),
-      static_scores_(options.static_scores) {
+      static_scores_(options.static_scores),
+      young_points_(options.young_points) {
   MOSLAM_CHECK(map_ != nullptr && sink_ != nullptr);
   options_.Check();
 }
@@ -69,6 +70,8 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
   current_.points.assign(n, nullptr);
   current_.outlier.assign(n, false);
   current_chi2_.assign(n, 0.0);
+  prediction_.reset();
+  young_points_moved_ = false;
   ++frames_since_keyframe_;
   ++frames_since_relocalization_;
 
@@ -153,6 +156,12 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
                                  ? std::max(options_.min_inliers, kMinInliersAfterRelocalization)
                                  : options_.min_inliers);
     if (!ok) out.reason = "too few inliers after local-map tracking";
+    // The motion model's error on this frame sets the prior of the next checks (young_points.h);
+    // not on a frame whose pose the check moved: that difference is the mover's earlier pull
+    // being undone, not the motion model's error.
+    if (ok && prediction_ && !out.recovered && !young_points_moved_ && !options_.monocular) {
+      young_points_.RecordPrediction(current_.T_cam_world, *prediction_);
+    }
     if (ok && !options_.localization) out.movable = JudgeLocalPoints(images);
     out.local_map_ms = MsSince(t0);
   }
@@ -313,6 +322,7 @@ int Tracker::TrackWithMotionModel() { return TrackFromPrediction(velocity_ * las
 
 int Tracker::TrackFromPrediction(const geometry::SE3& predicted, float radius_scale) {
   current_.T_cam_world = predicted;
+  prediction_ = predicted;
   std::vector<std::shared_ptr<map::MapPoint>> candidates;
   for (const auto& p : last_.points) {
     if (p && !p->bad) candidates.push_back(p);
@@ -449,9 +459,10 @@ int Tracker::OptimizeCurrentPose() {
     initial_outlier.resize(index.size());
     for (size_t k = 0; k < index.size(); ++k) initial_outlier[k] = !consensus.inlier[k];
   }
-  const optim::PoseOptimizerResult result = OptimizeFramePose(
+  optim::PoseOptimizerResult result = OptimizeFramePose(
       model_, current_.frame, index, points, start, options_.num_threads, weights, initial_outlier);
   if (result.num_inliers < 3) return 0;
+  if (!options_.monocular) CheckYoungPoints(index, points, start, &result);
   current_.T_cam_world = result.T_cam_world;
   for (size_t k = 0; k < index.size(); ++k) {
     current_.outlier[index[k]] = !result.inlier[k];

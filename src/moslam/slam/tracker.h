@@ -34,6 +34,7 @@
 #include "moslam/slam/moving_regions.h"
 #include "moslam/slam/relocalizer.h"
 #include "moslam/slam/static_scores.h"
+#include "moslam/slam/young_points.h"
 
 namespace moslam::slam {
 
@@ -87,6 +88,9 @@ struct TrackerOptions {
   // information cannot take the camera along when it moves; the optimizer starts from them.
   bool pose_consensus = true;
   optim::PoseConsensusOptions consensus;
+  // Stereo / RGB-D: recently made points that fit a pose of their own much better than the one
+  // the long-known points give are left out of the frame's pose (slam/young_points.h).
+  YoungPointOptions young_points;
   // A motion model that keeps under a quarter of the last frame's inliers is cross-checked with
   // the reference keyframe's descriptor matches, the better pose kept (a prediction far off
   // among repeated structure; Tracker::CrossCheckWithReference).
@@ -193,6 +197,12 @@ class Tracker {
   // probabilities (static_scores.h); points judged moving are erased (returns how many) and the
   // inconsistent keypoints collected.
   int JudgeResiduals(std::vector<InconsistentKeypoint>* inconsistent);
+  // The established-points check of the pose just optimized from matches `index` (keypoints of
+  // the current frame, their map points at `points`, optimized from `start`): replaces *result
+  // when the young points move (young_points.h). Stereo / RGB-D.
+  void CheckYoungPoints(const std::vector<size_t>& index,
+                        const std::vector<Eigen::Vector3d>& points, const geometry::SE3& start,
+                        optim::PoseOptimizerResult* result);
   // The keyframe-to-be's keypoints flagged moving, as inconsistent keypoints.
   void AppendMovingKeypoints(std::vector<InconsistentKeypoint>* inconsistent) const;
   void FlagMovingKeypoints();
@@ -218,6 +228,10 @@ class Tracker {
   bool last_ok_ = false;
   bool have_velocity_ = false;
   geometry::SE3 velocity_;  // T_cam_world(k) * T_world_cam(k-1)
+  // The pose the motion model (or a short-loss recovery) predicted for the current frame, before
+  // any optimization: where the established-points check starts (young_points.h). Reset each frame.
+  std::optional<geometry::SE3> prediction_;
+  bool young_points_moved_ = false;  // the check replaced a pose of the current frame
   // The last frame-to-frame velocity (not one spanning a loss) and its interval in seconds,
   // for the short-loss prediction (tracker_recovery.cc); kept through relocalized frames.
   geometry::SE3 recovery_motion_;
@@ -235,6 +249,7 @@ class Tracker {
   std::deque<std::pair<feature::Frame, geometry::SE3>> recent_frames_;
   const KeyFrameDatabase* database_ = nullptr;
   StaticScores static_scores_;
+  YoungPointCheck young_points_;
   // Per keypoint of the current frame: the chi-square error of its match after the last pose
   // optimization (0 when unmatched).
   std::vector<double> current_chi2_;

@@ -1,6 +1,7 @@
 // The Tracker's part in handling movable objects (issue 24): judging the local map's points by
-// each frame's mask and depth (slam/movable_points.h), and the moving-keypoint check of new
-// keyframes (slam/moving_keypoints.h). Same locking as tracker.cc: called under Map::mutex().
+// each frame's mask and depth (slam/movable_points.h), the moving-keypoint check of new
+// keyframes (slam/moving_keypoints.h), and the established-points check of each pose
+// (slam/young_points.h). Same locking as tracker.cc: called under Map::mutex().
 #include <algorithm>
 #include <set>
 
@@ -25,6 +26,29 @@ MovablePointsStats Tracker::JudgeLocalPoints(const FrameImages& images) {
   }
   return JudgeMovablePoints(map_, unmatched, {current_.T_cam_world, images.mask, images.depth},
                             camera_, options_.movable);
+}
+
+void Tracker::CheckYoungPoints(const std::vector<size_t>& index,
+                               const std::vector<Eigen::Vector3d>& points,
+                               const geometry::SE3& start, optim::PoseOptimizerResult* result) {
+  if (!options_.young_points.enabled) return;
+  std::vector<double> ages(index.size());
+  const double t = current_.frame.timestamp;
+  for (size_t k = 0; k < index.size(); ++k) {
+    ages[k] = static_scores_.Age(current_.points[index[k]]->id, t);
+  }
+  // Without a motion-model prediction (the reference keyframe's matches, relocalization) the
+  // prior is where the optimization started.
+  YoungPointResult check = young_points_.Check(model_, current_.frame, index, points, ages, *result,
+                                               prediction_.value_or(start), options_.num_threads);
+  if (!check.moving) return;
+  young_points_moved_ = true;
+  spdlog::debug(
+      "frame at {:.3f}: {} of {} young points move apart from the established ones (ratio "
+      "{:.1f}, prior sigma {:.4f} m {:.4f} rad); left out of the pose",
+      t, std::count(check.excluded.begin(), check.excluded.end(), true), check.num_young,
+      check.ratio, young_points_.PriorSigma()[0], young_points_.PriorSigma()[1]);
+  *result = std::move(check.pose);
 }
 
 int Tracker::JudgeResiduals(std::vector<InconsistentKeypoint>* inconsistent) {

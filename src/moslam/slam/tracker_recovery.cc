@@ -24,6 +24,7 @@ void TrackerOptions::Check() const {
   moving.Check();
   static_scores.Check();
   consensus.Check();
+  young_points.Check();
 }
 
 std::optional<geometry::SE3> Tracker::RecoveryPrediction() const {
