@@ -50,7 +50,7 @@
 namespace moslam::slam {
 
 struct YoungPointOptions {
-  bool enabled = false;  // SystemOptions::young_points / moslam run --young-points
+  bool enabled = false;          // SystemOptions::young_points / moslam run --young-points
   int min_matches = 60;          // matches needed before the check runs (>= 2)
   double age_quantile = 0.9;     // the reference age: this quantile of the matches' ages, (0, 1]
   double old_fraction = 0.5;     // established: age >= this x the reference age, (0, 1]
