@@ -159,7 +159,8 @@ TrackOutcome Tracker::Track(feature::Frame frame, const FrameImages& images) {
     // The motion model's error on this frame sets the prior of the next checks (young_points.h);
     // not on a frame whose pose the check moved: that difference is the mover's earlier pull
     // being undone, not the motion model's error.
-    if (ok && prediction_ && !out.recovered && !young_points_moved_ && !options_.monocular) {
+    if (ok && prediction_ && !out.recovered && !young_points_moved_ && !options_.monocular &&
+        options_.young_points.enabled) {
       young_points_.RecordPrediction(current_.T_cam_world, *prediction_);
     }
     if (ok && !options_.localization) out.movable = JudgeLocalPoints(images);

@@ -44,10 +44,10 @@ void Tracker::CheckYoungPoints(const std::vector<size_t>& index,
   if (!check.moving) return;
   young_points_moved_ = true;
   spdlog::debug(
-      "frame at {:.3f}: {} of {} young points move apart from the established ones (ratio "
+      "frame at {:.3f}: {} of {} young points move apart from the established ones (excess "
       "{:.1f}, prior sigma {:.4f} m {:.4f} rad); left out of the pose",
       t, std::count(check.excluded.begin(), check.excluded.end(), true), check.num_young,
-      check.ratio, young_points_.PriorSigma()[0], young_points_.PriorSigma()[1]);
+      check.excess, young_points_.PriorSigma()[0], young_points_.PriorSigma()[1]);
   *result = std::move(check.pose);
 }
 

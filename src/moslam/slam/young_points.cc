@@ -6,7 +6,6 @@
 
 #include <Eigen/Cholesky>
 
-#include "moslam/geometry/so3.h"
 #include "moslam/optim/cost_functions.h"
 #include "moslam/slam/frame_pose.h"
 #include "moslam/util/check.h"
@@ -30,9 +29,8 @@ struct Normal {
     n += o.n;
     return *this;
   }
-  // The model's decrease at its minimum, g' H^-1 g (H damped by a millionth of its scale, so a
-  // group that leaves a direction free does not divide by zero).
-  double Decrease() const { return g.dot(Solve()); }
+  // The model's minimizing step, H^-1 g (H damped by a millionth of its scale, so a group that
+  // leaves a direction free does not divide by zero).
   Vector6d Solve() const {
     const double damping = 1e-6 * std::max(H.diagonal().maxCoeff(), 1e-12);
     return (H + damping * Matrix6d::Identity()).ldlt().solve(g);
@@ -49,9 +47,10 @@ void AddObservation(const optim::CameraModel& camera, const optim::Observation& 
                                               r.data(), &J_p)) {
     return;
   }
-  Eigen::Matrix<double, N, 6> J;
-  J.template leftCols<3>() = J_p;
-  J.template rightCols<3>() = J_p * -geometry::Hat(p_cam);
+  // The pose optimizer's Jacobian (same perturbation), whose 7th column is zero.
+  Eigen::Matrix<double, N, optim::kPoseSize, Eigen::RowMajor> J_pose;
+  optim::internal::WritePoseJacobian<N>(J_p, p_cam, J_pose.data());
+  const auto J = J_pose.template leftCols<6>();
   normal->H += J.transpose() * J;
   normal->g += J.transpose() * r;
   ++normal->n;
@@ -95,11 +94,11 @@ void YoungPointOptions::Check() const {
     ThrowInput("YoungPointOptions.min_established must be >= 6 (got {})", min_established);
   }
   if (min_young < 3) ThrowInput("YoungPointOptions.min_young must be >= 3 (got {})", min_young);
-  if (!(min_ratio > 0.0) || !std::isfinite(min_ratio)) {
-    ThrowInput("YoungPointOptions.min_ratio must be > 0 (got {})", min_ratio);
+  if (!(min_excess > 0.0) || !std::isfinite(min_excess)) {
+    ThrowInput("YoungPointOptions.min_excess must be > 0 (got {})", min_excess);
   }
-  if (!(ratio_per_point >= 0.0) || !std::isfinite(ratio_per_point)) {
-    ThrowInput("YoungPointOptions.ratio_per_point must be >= 0 (got {})", ratio_per_point);
+  if (!(excess_per_point >= 0.0) || !std::isfinite(excess_per_point)) {
+    ThrowInput("YoungPointOptions.excess_per_point must be >= 0 (got {})", excess_per_point);
   }
   if (!(prior_scale > 0.0) || !std::isfinite(prior_scale)) {
     ThrowInput("YoungPointOptions.prior_scale must be > 0 (got {})", prior_scale);
@@ -187,9 +186,9 @@ YoungPointResult YoungPointCheck::Check(const optim::CameraModel& camera,
   prior.H.diagonal() << Eigen::Vector3d::Constant(1.0 / (sigma[0] * sigma[0])),
       Eigen::Vector3d::Constant(1.0 / (sigma[1] * sigma[1]));
   prior.g = prior.H * d;
-  Normal h1_established = established;
-  h1_established += prior;
-  const geometry::SE3 T_established = h1_established.Minimum(T);
+  Normal established_with_prior = established;
+  established_with_prior += prior;
+  const geometry::SE3 T_established = established_with_prior.Minimum(T);
   const geometry::SE3 T_young = young.Minimum(T);
   // The young points' chi-square at the established pose against at their own (each capped at
   // the outlier threshold, so that a few gross errors do not decide).
@@ -200,9 +199,9 @@ YoungPointResult YoungPointCheck::Check(const optim::CameraModel& camera,
     at_established[k] =
         std::min(threshold, optim::ChiSquare(camera, obs[k], T_established * points_world[k]));
     at_young[k] = std::min(threshold, optim::ChiSquare(camera, obs[k], T_young * points_world[k]));
-    if (full.inlier[k]) out.ratio += at_established[k] - at_young[k];
+    if (full.inlier[k]) out.excess += at_established[k] - at_young[k];
   }
-  out.moving = out.ratio > std::max(options_.min_ratio, options_.ratio_per_point * young.n);
+  out.moving = out.excess > std::max(options_.min_excess, options_.excess_per_point * young.n);
   if (!out.moving) return out;
 
   // Which young points follow the mover: those closer to the young group's own pose.

@@ -25,7 +25,7 @@
 //     translation and rotation, at least the floors; frames whose pose this check changed are not
 //     counted (that difference is the mover's pull being undone).
 //  4. The statistic: the young inliers' chi-square at the established pose minus at their own
-//     pose, each capped at the outlier threshold. Above max(min_ratio, ratio_per_point x young
+//     pose, each capped at the outlier threshold. Above max(min_excess, excess_per_point x young
 //     inliers) the young points move: the frame is re-optimized from the established pose with
 //     the established points and the young points closer to it than to the young group's pose;
 //     the others are excluded (outliers, and counted as fully inconsistent by the static scores,
@@ -52,15 +52,15 @@
 namespace moslam::slam {
 
 struct YoungPointOptions {
-  bool enabled = false;          // SystemOptions::young_points / moslam run --young-points
-  int min_matches = 60;          // matches needed before the check runs (>= 2)
-  double age_quantile = 0.9;     // the reference age: this quantile of the matches' ages, (0, 1]
-  double old_fraction = 0.5;     // established: age >= this x the reference age, (0, 1]
-  int min_established = 30;      // established inliers needed (>= 6)
-  int min_young = 15;            // young inliers needed (>= 3)
-  double min_ratio = 30.0;       // the statistic (4. above) that says "moving" ... (> 0)
-  double ratio_per_point = 0.5;  // ... and at least this per young inlier (>= 0)
-  double prior_scale = 2.0;      // prior sigma = this x the RMS prediction error (> 0) ...
+  bool enabled = false;           // SystemOptions::young_points / moslam run --young-points
+  int min_matches = 60;           // matches needed before the check runs (>= 2)
+  double age_quantile = 0.9;      // the reference age: this quantile of the matches' ages, (0, 1]
+  double old_fraction = 0.5;      // established: age >= this x the reference age, (0, 1]
+  int min_established = 30;       // established inliers needed (>= 6)
+  int min_young = 15;             // young inliers needed (>= 3)
+  double min_excess = 30.0;       // the statistic (4. above) that says "moving" ... (> 0)
+  double excess_per_point = 0.5;  // ... and at least this per young inlier (>= 0)
+  double prior_scale = 2.0;       // prior sigma = this x the RMS prediction error (> 0) ...
   double prior_translation_floor = 0.001;  // ... at least this, metres (> 0)
   double prior_rotation_floor = 0.001;     // ... and this, radians (> 0)
   int prior_window = 30;                   // frames whose prediction errors give the RMS (>= 1)
@@ -72,7 +72,7 @@ struct YoungPointResult {
   bool moving = false;         // the young points fit a pose of their own much better
   int num_young = 0;           // matches judged young
   int young_inliers = 0;       // of those, inliers of the frame's pose
-  double ratio = 0.0;          // the test statistic (4. above)
+  double excess = 0.0;         // the test statistic (4. above)
   std::vector<bool> excluded;  // per match, when moving: a young point left out of the pose
   // When moving: the pose from the established and the kept young points, with inlier flags and
   // chi2 for every match (an excluded match is an outlier; its chi2 is at least

@@ -100,7 +100,7 @@ TEST(YoungPoints, BoxMovingBeforeAFarWallIsLeftOut) {
   const YoungPointResult r = RunCheck(YoungPointCheck{On()}, s, Predicted(truth));
   ASSERT_TRUE(r.checked);
   EXPECT_EQ(r.num_young, 80);
-  ASSERT_TRUE(r.moving) << "ratio " << r.ratio << " over " << r.young_inliers << " inliers";
+  ASSERT_TRUE(r.moving) << "excess " << r.excess << " over " << r.young_inliers << " inliers";
   ASSERT_EQ(r.excluded.size(), s.indices.size());
   int box_excluded = 0;
   for (size_t k = 0; k < s.indices.size(); ++k) {
@@ -130,9 +130,9 @@ TEST(YoungPoints, StaticSceneIsNotJudgedMoving) {
     const Scene s = MakeScene(truth, shift);
     const YoungPointResult r = RunCheck(YoungPointCheck{On()}, s, Predicted(truth));
     EXPECT_TRUE(r.checked);
-    EXPECT_FALSE(r.moving) << "shift " << shift << ": ratio " << r.ratio;
+    EXPECT_FALSE(r.moving) << "shift " << shift << ": excess " << r.excess;
     EXPECT_TRUE(r.excluded.empty());
-    EXPECT_LT(r.ratio, 20.0);
+    EXPECT_LT(r.excess, 20.0);
   }
 }
 
@@ -154,7 +154,8 @@ TEST(YoungPoints, PriorLoosensWithTheMotionModelsRecentErrors) {
   EXPECT_GT(check.PriorSigma()[0], 0.005);
   const YoungPointResult loose = RunCheck(check, s, off);
   ASSERT_TRUE(loose.checked);
-  EXPECT_LT(loose.ratio, 0.5 * tight.ratio) << "loose " << loose.ratio << " tight " << tight.ratio;
+  EXPECT_LT(loose.excess, 0.5 * tight.excess)
+      << "loose " << loose.excess << " tight " << tight.excess;
 }
 
 TEST(YoungPoints, NotCheckedWithoutEnoughMatchesOfBothAges) {
@@ -190,8 +191,8 @@ TEST(YoungPoints, OptionsAreChecked) {
   throws([](YoungPointOptions* o) { o->old_fraction = 0.0; });
   throws([](YoungPointOptions* o) { o->min_established = 5; });
   throws([](YoungPointOptions* o) { o->min_young = 2; });
-  throws([](YoungPointOptions* o) { o->min_ratio = 0.0; });
-  throws([](YoungPointOptions* o) { o->ratio_per_point = -1.0; });
+  throws([](YoungPointOptions* o) { o->min_excess = 0.0; });
+  throws([](YoungPointOptions* o) { o->excess_per_point = -1.0; });
   throws([](YoungPointOptions* o) { o->prior_scale = 0.0; });
   throws([](YoungPointOptions* o) { o->prior_translation_floor = 0.0; });
   throws([](YoungPointOptions* o) { o->prior_rotation_floor = -1.0; });
