@@ -14,8 +14,10 @@ function(moslam_module name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
   add_library(moslam_${name} ${ARG_SOURCES})
   add_library(moslam::${name} ALIAS moslam_${name})
-  # Headers are included as "moslam/<module>/<file>.h".
-  target_include_directories(moslam_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+  # Headers are included as "moslam/<module>/<file>.h", from the source tree or, installed
+  # (cmake/MoslamInstall.cmake), from <prefix>/include.
+  target_include_directories(moslam_${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>
+                                                   $<INSTALL_INTERFACE:include>)
   target_link_libraries(moslam_${name} PUBLIC ${ARG_DEPS})
 endfunction()
 

@@ -338,6 +338,16 @@ class System::Impl : public KeyFrameSink {
     return trajectory;
   }
 
+  std::vector<Eigen::Vector3d> MapPointPositions() const {
+    std::vector<Eigen::Vector3d> positions;
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    positions.reserve(map_.points().size());
+    for (const auto& [id, point] : map_.points()) {
+      if (!point->bad) positions.push_back(point->position);
+    }
+    return positions;
+  }
+
   MapSummary Summary() const {
     MapSummary summary;
     {
@@ -499,6 +509,9 @@ void System::Finish() { impl_->Finish(); }
 eval::Trajectory System::CameraTrajectory() const { return impl_->CameraTrajectory(); }
 eval::Trajectory System::KeyFrameTrajectory() const { return impl_->KeyFrameTrajectory(); }
 MapSummary System::Summary() const { return impl_->Summary(); }
+std::vector<Eigen::Vector3d> System::MapPointPositions() const {
+  return impl_->MapPointPositions();
+}
 void System::SaveMap(const std::string& path) { impl_->SaveMap(path); }
 
 }  // namespace moslam::slam

@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -210,6 +211,8 @@ class System {
   eval::Trajectory CameraTrajectory() const;
   eval::Trajectory KeyFrameTrajectory() const;
   MapSummary Summary() const;
+  // The world positions of the map points not erased (api::Slam::MapPoints, the Python module).
+  std::vector<Eigen::Vector3d> MapPointPositions() const;
   // Finishes (as Finish()) and writes the whole map to `path` (mapio/map_file.h: a temporary file
   // renamed when complete). InputError when it cannot be written.
   void SaveMap(const std::string& path);
