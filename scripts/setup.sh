@@ -19,6 +19,8 @@ PACKAGES=(
   python3-numpy python3-opencv
   # the parsers' fuzzers (scripts/fuzz.sh): clang and its libFuzzer and sanitizer runtimes
   clang libclang-rt-14-dev
+  # the Python module (python/) and its tests
+  pybind11-dev python3-dev python3-pytest
 )
 
 missing=()
