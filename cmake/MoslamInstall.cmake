@@ -37,8 +37,8 @@ install(FILES ${PROJECT_BINARY_DIR}/moslamConfig.cmake
         DESTINATION ${MOSLAM_CMAKE_DIR})
 
 # pkg-config: the libraries in link order, then what they need. Ceres and cereal ship no .pc
-# file in Debian 12: Ceres is named on Libs (its own dependencies come with libceres.so), cereal
-# is header only and used in mapio's sources alone.
+# file in Debian 12: Ceres is named on Libs with glog (its headers call glog; its other
+# dependencies come with libceres.so), cereal is header only and used in mapio's sources alone.
 list(TRANSFORM MOSLAM_INSTALLED_MODULES PREPEND "-lmoslam_" OUTPUT_VARIABLE MOSLAM_PC_LIBS)
 string(JOIN " " MOSLAM_PC_LIBS ${MOSLAM_PC_LIBS})
 configure_file(${PROJECT_SOURCE_DIR}/cmake/moslam.pc.in ${PROJECT_BINARY_DIR}/moslam.pc @ONLY)
