@@ -15,6 +15,7 @@
 #include "moslam/io/dataset.h"
 #include "moslam/io/image.h"
 #include "moslam/io/orbslam_settings.h"
+#include "moslam/io/video.h"
 #include "moslam/net/blas_core.h"
 #include "moslam/runner/mask_damage.h"
 #include "moslam/runner/mask_source.h"
@@ -216,7 +217,8 @@ void SetImageSize(const io::Sequence& sequence, const std::string& settings_path
   std::string source = settings_path;
   if (!settings->camera.HasSize()) {
     const std::string& first = sequence.frames.front().image_left;
-    const cv::Mat image = io::LoadGreyImage(first);
+    const cv::Mat image = options->read_images ? options->read_images(sequence.frames.front()).left
+                                               : io::LoadGreyImage(first);
     io::CompleteImageSize(settings, settings_path, image.cols, image.rows, first);
     source = fmt::format("{} (none given there: the first frame's, {})", settings_path, first);
   }
@@ -224,10 +226,35 @@ void SetImageSize(const io::Sequence& sequence, const std::string& settings_path
   options->image_size_source = source;
 }
 
+// --dataset video FILE: a monocular sequence whose frames are decoded in the loader thread
+// (io/video.h), stamped by the container or by --rate. Masks that are files named after the
+// images (files, synth-gt) have nothing to be named after.
+void SetUpVideo(const RunArgs& args, const std::string& path, io::Sequence* sequence,
+                runner::RunOptions* options) {
+  const auto kind = runner::ParseMaskSourceKind(args.mask_source.at(0));
+  if (kind == runner::MaskSourceKind::kFiles || kind == runner::MaskSourceKind::kSynthGt) {
+    ThrowInput(
+        "--mask-source {}: needs image files named like the masks; a video ({}) has none "
+        "(onnx, detector or model compute masks from the frames)",
+        args.mask_source[0], path);
+  }
+  io::VideoOptions video;
+  video.rate_hz = args.rate_hz;
+  *sequence = io::ReadVideo(path, video);
+  auto reader = std::make_shared<io::VideoReader>(path);
+  options->read_images = [reader](const io::FrameEntry& frame) {
+    io::FrameImages images;
+    images.left = reader->Read(frame.index, io::ColourMode::kGrey);
+    return images;
+  };
+}
+
 void Run(const RunArgs& args) {
-  const auto format = io::ParseDatasetFormat(args.dataset.at(0));
-  if (!format || *format == io::DatasetFormat::kAuto) {
-    ThrowInput("--dataset: unknown format '{}' (tum, kitti, euroc, folder)", args.dataset[0]);
+  const bool video = args.dataset.at(0) == "video";
+  const auto format = io::ParseDatasetFormat(video ? "auto" : args.dataset.at(0));
+  if (!format || (*format == io::DatasetFormat::kAuto && !video)) {
+    ThrowInput("--dataset: unknown format '{}' (tum, kitti, euroc, folder, video)",
+               args.dataset[0]);
   }
   const std::string& path = args.dataset.at(1);
   // The settings are read first: an image folder takes its frame rate from Camera.fps.
@@ -236,7 +263,11 @@ void Run(const RunArgs& args) {
   dataset_options.monocular = args.monocular;
   io::Sequence sequence;
   io::OrbSlamSettings settings;
-  if (*format == io::DatasetFormat::kImageFolder) {
+  runner::RunOptions options;
+  if (video) {
+    settings = io::LoadOrbSlamSettings(args.settings, io::SensorType::kMonocular);
+    SetUpVideo(args, path, &sequence, &options);
+  } else if (*format == io::DatasetFormat::kImageFolder) {
     settings = io::LoadOrbSlamSettings(args.settings, io::SensorType::kMonocular);
     dataset_options.image_folder_rate_hz = args.rate_hz > 0 ? args.rate_hz : settings.fps;
     sequence = io::ReadDataset(path, dataset_options);
@@ -252,7 +283,6 @@ void Run(const RunArgs& args) {
     masks =
         runner::MakeDamagedMaskSource(std::move(masks), runner::ParseMaskDamage(args.mask_damage));
   }
-  runner::RunOptions options;
   if (!args.frames.empty()) options.frames = runner::ParseFrameRange(args.frames);
   if (!args.skip_frames.empty()) {
     options.skip = runner::ParseFrameRange(args.skip_frames, "--skip-frames");
@@ -271,6 +301,7 @@ void Run(const RunArgs& args) {
   runner::RunDescription description;
   description.dataset_path = sequence.root;
   description.format = *format;
+  if (video) description.format_name = "video";
   description.sensor = sequence.sensor;
   description.settings_path = args.settings;
   description.settings = settings;
@@ -315,7 +346,7 @@ void AddRunCommand(CLI::App& app) {
   command
       ->add_option("--dataset", args->dataset,
                    "FORMAT PATH: tum, kitti, euroc or folder, and "
-                   "the data-set folder")
+                   "the data-set folder; or video and a video file (monocular)")
       ->expected(2)
       ->required();
   command->add_option("--settings", args->settings, "ORB-SLAM2 settings YAML (configs/*.yaml)")
@@ -368,7 +399,8 @@ void AddRunCommand(CLI::App& app) {
       ->capture_default_str();
   command->add_option(
       "--rate", args->rate_hz,
-      "folder: frames per second of the images (default: the settings' Camera.fps)");
+      "folder: frames per second of the images (default: the settings' Camera.fps); "
+      "video: frame k at k / rate seconds (default: the container's times)");
   command->add_option("--queue", args->queue, "Frames loaded ahead of tracking")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();

@@ -283,6 +283,7 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                          {"blas_core", net::DescribeOpenBlasCore()},
                          {"deterministic", d.deterministic},
                          {"realtime", d.realtime}};
+  if (!d.format_name.empty()) json["dataset"]["format"] = d.format_name;
   json["ate"] = ate ? ate->json : nlohmann::json(nullptr);
   // How the run ended: "completed", or "failed" / "interrupted" with why; the counts above are
   // those of the frames tracked until then.
@@ -294,7 +295,8 @@ std::string FormatSummary(const RunResult& result, const RunDescription& d,
                           const std::optional<RunAte>& ate) {
   const StateCounts counts = CountStates(result);
   std::string text;
-  text += fmt::format("data set     {} ({}, {})\n", d.dataset_path, io::ToString(d.format),
+  text += fmt::format("data set     {} ({}, {})\n", d.dataset_path,
+                      d.format_name.empty() ? io::ToString(d.format) : d.format_name.c_str(),
                       io::ToString(d.sensor));
   text += fmt::format(
       "frames       {} ({}:{}): {} tracked, {} lost, {} not initialized{}{}{}\n",

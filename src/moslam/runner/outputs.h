@@ -44,6 +44,7 @@ void WriteFramesCsv(const RunResult& result, const std::string& path);
 struct RunDescription {
   std::string dataset_path;
   io::DatasetFormat format = io::DatasetFormat::kAuto;  // as read; kKitti adds the KITTI file
+  std::string format_name;  // in place of io::ToString(format) when set ("video")
   io::SensorType sensor = io::SensorType::kStereo;
   std::string settings_path;
   io::OrbSlamSettings settings;

@@ -103,7 +103,9 @@ LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options) {
   loaded.index = frame.index;
   loaded.entry = &frame;
   const auto start = Clock::now();
-  io::FrameImages images = io::LoadFrameImages(frame, options.colour, options.depth_factor);
+  io::FrameImages images = options.read_images
+                               ? options.read_images(frame)
+                               : io::LoadFrameImages(frame, options.colour, options.depth_factor);
   loaded.load_ms = MsSince(start);
   // LoadFrameImages makes the right and depth images agree with the left one.
   if (!options.image_size.empty() && images.left.size() != options.image_size) {

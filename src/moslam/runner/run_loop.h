@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstddef>
 #include <exception>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -55,6 +56,10 @@ struct RunOptions {
   // says RunEnd::kInterrupted. `moslam run` points it at the number of the signal (SIGINT,
   // SIGTERM) its handler stored. nullptr: never.
   const std::atomic<int>* stop = nullptr;
+  // How a frame's images are read, in the loader thread; empty: from their files
+  // (io::LoadFrameImages with `colour` and `depth_factor`). A video (`moslam run --dataset video`)
+  // decodes its frames here (io::VideoReader). Throws InputError naming the file and frame.
+  std::function<io::FrameImages(const io::FrameEntry&)> read_images;
   void Check() const;  // InputError naming the field
 };
 
