@@ -8,7 +8,7 @@ PACKAGES=(
   g++ cmake make pkg-config clang-format
   # libraries (README "Dependencies" says why each)
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
-  libceres-dev libcereal-dev
+  libceres-dev libcereal-dev liboctomap-dev
   libopencv-contrib-dev libtorch-dev
   # the BLAS libtorch and CHOLMOD get through Debian's alternatives (ATLAS otherwise; README)
   libopenblas0-openmp

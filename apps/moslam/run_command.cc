@@ -76,6 +76,7 @@ struct RunArgs {
   std::string save_map;
   std::string load_map;
   bool localization = false;
+  bool save_keyframe_masks = false;
 };
 
 // The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
@@ -164,6 +165,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.completion_structure = !args.no_completion_planes;
   options.pose_consensus = !args.no_pose_consensus;
   options.young_points = args.young_points;
+  options.report_keyframe_masks = args.save_keyframe_masks;
   options.motion_cross_check = !args.no_motion_cross_check;
   options.mask_margin_px = args.mask_margin;
   options.mask_propagation_frames = args.mask_propagation;
@@ -284,6 +286,10 @@ void Run(const RunArgs& args) {
   runner::CheckGroundTruth(sequence);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
   runner::CheckOutputFolder(out);  // before the run, not after it
+  if (args.save_keyframe_masks) {
+    options.keyframe_mask_folder = out + "/keyframe_masks";
+    runner::CheckOutputFolder(options.keyframe_mask_folder);
+  }
   const std::unique_ptr<runner::Tracker> tracker = MakeTracker(settings, sequence.sensor, args);
   // SIGINT / SIGTERM from here on end the run after the frame in hand, with its outputs written.
   const runner::ScopedStopSignals signals;
@@ -470,6 +476,10 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--localization", args->localization,
                     "With --load-map: track and relocalize in the loaded map without changing "
                     "it (no new keyframes or points, no loop closing)");
+  command->add_flag("--save-keyframe-masks", args->save_keyframe_masks,
+                    "Write each keyframe's movable mask (as its features were extracted: the "
+                    "source's mask, carried and grown) to OUT/keyframe_masks/<stamp>.png, for "
+                    "`moslam map export` to fuse the keyframes' depth without the movable objects");
   command->callback([args] {
     if (args->quiet) spdlog::set_level(std::max(spdlog::get_level(), spdlog::level::warn));
     Run(*args);

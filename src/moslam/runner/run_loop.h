@@ -55,6 +55,11 @@ struct RunOptions {
   // says RunEnd::kInterrupted. `moslam run` points it at the number of the signal (SIGINT,
   // SIGTERM) its handler stored. nullptr: never.
   const std::atomic<int>* stop = nullptr;
+  // When set, each keyframe's movable mask (slam::FrameReport::keyframe_mask, which the tracker
+  // reports with SystemOptions::report_keyframe_masks) is written there as <stamp>.png (the stamp
+  // with 6 decimals, as KeyFrameTrajectory.txt prints it; 255 = movable) as the run goes, and not
+  // kept in the records. A keyframe without a mask gets no file. The folder must exist.
+  std::string keyframe_mask_folder;
   void Check() const;  // InputError naming the field
 };
 

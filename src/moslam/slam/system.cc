@@ -241,6 +241,7 @@ class System::Impl : public KeyFrameSink {
     report.num_matches = outcome.num_matches;
     report.num_inliers = outcome.num_inliers;
     report.new_keyframe = outcome.new_keyframe;
+    if (options_.report_keyframe_masks && outcome.new_keyframe) report.keyframe_mask = mask;
     report.relocalized = outcome.relocalized;
     if (outcome.relocalized) ++relocalizations_;
     report.recovered = outcome.recovered;

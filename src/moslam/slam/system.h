@@ -128,6 +128,10 @@ struct SystemOptions {
   // relocalized when lost, but no keyframe or map point is added or erased and loop closing is
   // off, so the map stays as loaded (moslam run --localization). Needs load_map.
   bool localization = false;
+  // Each new keyframe's report carries the movable mask its features were extracted with
+  // (FrameReport::keyframe_mask), so that the keyframes' depth can later be fused without the
+  // movable objects (moslam run --save-keyframe-masks, moslam map export). Off: nothing is kept.
+  bool report_keyframe_masks = false;
   void Check() const;  // InputError naming the field
 };
 
@@ -172,6 +176,10 @@ struct FrameReport {
   // run, whether the map levels off once the place is mapped (frames.csv, docs/ROBUSTNESS.md).
   int map_keyframes = 0;
   int map_points = 0;
+  // On a new keyframe with SystemOptions::report_keyframe_masks: the frame's movable mask as the
+  // extractor got it (the network's, united with the carried one and grown over depth; CV_8UC1,
+  // non-zero = movable), empty when the frame had none. Shares the tracker's buffer: read-only.
+  cv::Mat keyframe_mask;
 };
 
 struct MapSummary {
