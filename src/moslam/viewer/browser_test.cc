@@ -133,6 +133,7 @@ class Page {
  public:
   explicit Page(const std::string& url) : socket_(url) {}
   bool Open() { return socket_.WaitOpen(); }
+  std::string failure() { return socket_.failure(); }
   json Call(const std::string& method, const json& params) {
     const int id = ++id_;
     socket_.Send(json{{"id", id}, {"method", method}, {"params", params}}.dump());
@@ -194,7 +195,7 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
   const int cdp = FreePort();
   Child browser({chromium, "--headless=new", "--no-sandbox", "--no-first-run",
                  "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--window-size=1400,900",
-                 "--remote-debugging-port=" + std::to_string(cdp),
+                 "--remote-allow-origins=*", "--remote-debugging-port=" + std::to_string(cdp),
                  "--user-data-dir=" + dir.path() + "/chromium",
                  "http://127.0.0.1:" + std::to_string(port) + "/"},
                 dir.path() + "/chromium.log");
@@ -214,7 +215,7 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
       60))
       << ReadFile(dir.path() + "/chromium.log");
   Page page(page_url);
-  ASSERT_TRUE(page.Open());
+  ASSERT_TRUE(page.Open()) << page_url << ": " << page.failure();
 
   // Paused after frame 0 (--viewer-paused): the page shows it and nothing moves.
   ASSERT_TRUE(Eventually(

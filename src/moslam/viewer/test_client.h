@@ -8,6 +8,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <condition_variable>
 #include <functional>
@@ -52,7 +54,7 @@ class RawSocket {
     std::string out;
     char buffer[65536];
     while (fd_ >= 0 && out.size() < limit) {
-      const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
+      const ssize_t n = ::recv(fd_, buffer, std::min(sizeof buffer, limit - out.size()), 0);
       if (n <= 0) break;
       out.append(buffer, static_cast<size_t>(n));
     }
@@ -92,14 +94,23 @@ inline bool PollUntil(const std::function<bool()>& done,
 
 inline HttpResponse HttpGet(int port, const std::string& path) {
   RawSocket socket(port);
-  socket.Send("GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
-  const std::string reply = socket.ReadAll();
+  socket.Send("GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) +
+              "\r\nConnection: close\r\n\r\n");
   HttpResponse response;
-  if (reply.size() > 12 && reply.compare(0, 5, "HTTP/") == 0) {
-    response.status = std::stoi(reply.substr(9, 3));
+  const std::string headers = socket.ReadHeaders();
+  if (headers.size() > 12 && headers.compare(0, 5, "HTTP/") == 0) {
+    response.status = std::stoi(headers.substr(9, 3));
   }
-  const size_t body = reply.find("\r\n\r\n");
-  if (body != std::string::npos) response.body = reply.substr(body + 4);
+  // Not every server closes after the reply (Chromium's DevTools one does not): read what
+  // Content-Length says when there is one.
+  std::string lower = headers;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const size_t length = lower.find("content-length:");
+  if (length == std::string::npos) {
+    response.body = socket.ReadAll();
+  } else {
+    response.body = socket.ReadAll(std::stoul(headers.substr(length + 15)));
+  }
   return response;
 }
 
@@ -134,8 +145,15 @@ class WsClient {
         close_code_ = code;
       });
     });
-    client_.set_fail_handler(
-        [this](websocketpp::connection_hdl) { Set([this] { closed_ = true; }); });
+    client_.set_fail_handler([this](websocketpp::connection_hdl h) {
+      const auto con = client_.get_con_from_hdl(h);
+      const std::string why =
+          con->get_ec().message() + " (HTTP " + std::to_string(con->get_response_code()) + ")";
+      Set([this, why] {
+        closed_ = true;
+        failure_ = why;
+      });
+    });
     client_.set_message_handler([this](websocketpp::connection_hdl, Client::message_ptr m) {
       Message message{m->get_opcode() == websocketpp::frame::opcode::binary, m->get_payload()};
       Set([this, &message] { messages_.push_back(std::move(message)); });
@@ -194,6 +212,11 @@ class WsClient {
     std::lock_guard<std::mutex> lock(mutex_);
     return closed_;
   }
+  // Why the connection could not be opened; empty when it was.
+  std::string failure() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return failure_;
+  }
   int close_code() {
     std::lock_guard<std::mutex> lock(mutex_);
     return close_code_;
@@ -228,6 +251,7 @@ class WsClient {
   std::condition_variable changed_;
   bool open_ = false, closed_ = false;
   int close_code_ = 0;
+  std::string failure_;
   std::vector<Message> messages_;
 };
 
