@@ -107,7 +107,8 @@ std::vector<float> AlignGroundTruth(const eval::Trajectory& gt, double t0,
     if (std::abs(gt.timestamps[i] - t0) < std::abs(gt.timestamps[nearest] - t0)) nearest = i;
   }
   const geometry::SE3 T_align = T_world_cam0 * gt.poses[nearest].Inverse();
-  for (size_t i = 0; i < gt.size() && gt.timestamps[i] <= until + 1e-6; ++i) {
+  // From the first tracked frame on: the frames before it have no estimate to compare with.
+  for (size_t i = nearest; i < gt.size() && gt.timestamps[i] <= until + 1e-6; ++i) {
     const Eigen::Vector3d p = T_align * gt.poses[i].translation();
     out.insert(out.end(),
                {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});

@@ -44,9 +44,9 @@ struct RunPicture {
 std::string EncodeSnapshot(const Snapshot& snapshot, const RunPicture& picture,
                            int max_image_width = 640);
 
-// The ground truth's positions (x, y, z) up to time `until`, moved so that its pose nearest in time
-// to `t0` lies on the estimate's pose then, `T_world_cam0`: the two start together and drift apart
-// as the estimate does. Empty for a ground truth without timestamps.
+// The ground truth's positions (x, y, z) from time `t0` up to time `until`, moved so that its pose
+// nearest in time to `t0` lies on the estimate's pose then, `T_world_cam0`: the two start together
+// and drift apart as the estimate does. Empty for a ground truth without timestamps.
 std::vector<float> AlignGroundTruth(const eval::Trajectory& gt, double t0,
                                     const geometry::SE3& T_world_cam0, double until);
 
