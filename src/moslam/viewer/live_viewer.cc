@@ -89,9 +89,15 @@ nlohmann::json LiveViewer::Numbers(const runner::FrameRecord& record) {
 
 void LiveViewer::OnFrame(const runner::FrameRecord& record, const slam::FrameInput& input,
                          runner::Tracker& tracker) {
+  // Kept (shared, not copied) for the final picture, which shows the last frame.
+  last_image_ = input.image;
+  last_mask_ = input.mask;
   Snapshot snapshot;
   snapshot.numbers = Numbers(record);
   snapshot.T_world_cam = record.report.T_world_cam;
+  if (snapshot.T_world_cam && !first_pose_)
+    first_pose_.emplace(record.timestamp, *snapshot.T_world_cam);
+  snapshot.first_pose = first_pose_;
   if (snapshot.T_world_cam) AppendPosition(*snapshot.T_world_cam, &pending_trajectory_);
   // A paused run shows the frame it stopped at, whatever the server has not sent yet, also to a
   // browser that connects later (the server keeps the last picture for it).
@@ -143,6 +149,9 @@ void LiveViewer::Finish(const runner::RunResult& result, runner::Tracker& tracke
     AppendPosition(pose, &snapshot.new_trajectory);
   }
   if (!result.camera.poses.empty()) snapshot.T_world_cam = result.camera.poses.back();
+  snapshot.image = last_image_;
+  snapshot.mask = last_mask_;
+  snapshot.first_pose = first_pose_;
   Publish(std::move(snapshot), true);
 }
 
@@ -159,10 +168,9 @@ void LiveViewer::Encode() {
   picture_.trajectory.insert(picture_.trajectory.end(), snapshot->new_trajectory.begin(),
                              snapshot->new_trajectory.end());
   const double timestamp = snapshot->numbers.value("timestamp", 0.0);
-  if (snapshot->T_world_cam && !first_pose_) first_pose_.emplace(timestamp, *snapshot->T_world_cam);
-  if (first_pose_) {
-    picture_.ground_truth =
-        AlignGroundTruth(ground_truth_, first_pose_->first, first_pose_->second, timestamp);
+  if (snapshot->first_pose) {
+    const auto& [t0, T_world_cam0] = *snapshot->first_pose;
+    picture_.ground_truth = AlignGroundTruth(ground_truth_, t0, T_world_cam0, timestamp);
   }
   server_->Broadcast(std::make_shared<const std::string>(EncodeSnapshot(*snapshot, picture_)),
                      /*binary=*/true);

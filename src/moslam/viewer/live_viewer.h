@@ -72,10 +72,11 @@ class LiveViewer : public runner::FrameObserver {
   size_t frames_ = 0;
   double fps_ = 0.0;
   std::chrono::steady_clock::time_point last_frame_time_;
+  cv::Mat last_image_, last_mask_;
+  std::optional<std::pair<double, geometry::SE3>> first_pose_;  // of the first tracked frame
   // Server thread only.
   RunPicture picture_;
   eval::Trajectory ground_truth_;
-  std::optional<std::pair<double, geometry::SE3>> first_pose_;  // time, pose of the first one
   // Pause / step, set by the server thread, waited on by the tracking thread.
   mutable std::mutex control_mutex_;
   std::condition_variable control_changed_;

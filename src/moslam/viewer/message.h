@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -31,6 +32,8 @@ struct Snapshot {
   // pose (none while lost).
   std::vector<float> new_trajectory;
   std::optional<geometry::SE3> T_world_cam;
+  // The first tracked frame's time and pose, where the ground truth is aligned (AlignGroundTruth).
+  std::optional<std::pair<double, geometry::SE3>> first_pose;
 };
 
 // The server thread's view of the whole run, to which each snapshot adds.

@@ -178,7 +178,7 @@ function fmt(x, digits) { return typeof x === 'number' ? x.toFixed(digits) : (x 
 function drawNumbers(h) {
   const ms = h.ms || {};
   const rows = [
-    ['frame', h.frame], ['state', h.finished ? (h.replay ? 'finished run' : 'run ended: ' + h.state) : h.state],
+    ['frame', h.frame === undefined ? '-' : h.frame], ['state', h.finished ? (h.replay ? 'finished run' : 'run ended: ' + h.state) : h.state],
     ['frames', h.frames], ['frames/s', fmt(h.fps, 1)],
     ['ms: mask / extract / track', [fmt(ms.mask, 1), fmt(ms.extract, 1), fmt(ms.track, 1)].join(' / ')],
     ['ms: local map / keyframe / total', [fmt(ms.local_map, 1), fmt(ms.keyframe, 1), fmt(ms.total, 1)].join(' / ')],
