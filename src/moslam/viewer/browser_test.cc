@@ -178,7 +178,7 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
     data = given;
   } else {
     Child synth(
-        {moslam, "synth", "--preset", "w_xyz", "--seed", "3", "--frames", "60", "--out", data},
+        {moslam, "synth", "--preset", "w_xyz", "--seed", "3", "--frames", "90", "--out", data},
         dir.path() + "/synth.log");
     ASSERT_EQ(synth.Wait(), 0) << ReadFile(dir.path() + "/synth.log");
   }
@@ -233,11 +233,12 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
 
   // Running, then paused from the page in the middle of the run: the counter stops.
   page.Click("resume");
-  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) >= 10; }, 60));
+  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) >= 3; }, 60));
   page.Click("pause");
   ASSERT_TRUE(Eventually([&] { return page.State().value("paused", false); }, 10));
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const int stopped_at = page.State().value("frame", -1);
+  ASSERT_FALSE(page.State().value("finished", true)) << "the run ended before the pause took";
   std::this_thread::sleep_for(std::chrono::seconds(1));
   EXPECT_EQ(page.State().value("frame", -1), stopped_at) << "the run went on while paused";
   if (const char* shot = std::getenv("MOSLAM_VIEWER_SCREENSHOT")) {
@@ -246,7 +247,8 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
         << Base64Decode(reply["result"].value("data", std::string()));
   }
   page.Click("step");
-  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) == stopped_at + 1; }, 30));
+  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) == stopped_at + 1; }, 30))
+      << "paused at " << stopped_at << ": " << page.State().dump();
   page.Click("resume");
 
   // The end: the page's own counts against summary.json.

@@ -18,6 +18,7 @@ const state = window.moslam = {
 };
 
 let socket = null;
+let lastMessage = null;  // kept out of window.moslam, which stays small to read
 function send(cmd) {
   if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify({cmd: cmd}));
 }
@@ -241,7 +242,7 @@ function onFrame(buffer) {
   drawNumbers(h);
   drawScene(m, s);
   drawImage(m, s, buffer).catch(e => { state.error = 'image: ' + e; });
-  state.lastMessage = m;
+  lastMessage = m;
 }
 
 function connect() {
@@ -274,7 +275,7 @@ document.getElementById('shot').onclick = () => {
   a.click();
 };
 document.getElementById('erased').onchange = document.getElementById('gt').onchange = () => {
-  if (state.lastMessage) drawScene(state.lastMessage, state.lastMessage.sections);
+  if (lastMessage) drawScene(lastMessage, lastMessage.sections);
 };
 window.addEventListener('keydown', (e) => {
   if (e.key === ' ') send(state.paused ? 'resume' : 'pause');
