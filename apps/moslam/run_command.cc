@@ -25,6 +25,7 @@
 #include "moslam/runner/tracker.h"
 #include "moslam/semantic/mask_refine.h"
 #include "moslam/util/error.h"
+#include "moslam/util/strings.h"
 #include "moslam/viewer/live_viewer.h"
 #if MOSLAM_HAVE_SLAM
 #include "moslam/slam/system.h"
@@ -79,7 +80,7 @@ struct RunArgs {
   std::string load_map;
   bool localization = false;
   // The live viewer (issue 26; src/moslam/viewer): the port given with --viewer, if given.
-  std::vector<int> viewer;
+  std::vector<std::string> viewer;  // CLI11 gives [] or [""] for --viewer alone
   bool viewer_on = false;
   std::string viewer_host = viewer::ServerOptions{}.host;
   bool viewer_paused = false;
@@ -242,7 +243,13 @@ std::unique_ptr<viewer::LiveViewer> MakeViewer(const RunArgs& args, const io::Se
   if (!args.viewer_on) return nullptr;
   viewer::ViewerOptions options;
   options.server.host = args.viewer_host;
-  if (!args.viewer.empty()) options.server.port = args.viewer.front();
+  if (!args.viewer.empty() && !args.viewer.front().empty()) {
+    const auto port = ParseInt(args.viewer.front());
+    if (!port || *port < 0 || *port > 65535) {
+      ThrowInput("--viewer: '{}' is no port (0-65535)", args.viewer.front());
+    }
+    options.server.port = static_cast<int>(*port);
+  }
   options.start_paused = args.viewer_paused;
   auto live = std::make_unique<viewer::LiveViewer>(options, stop);
   live->SetGroundTruth(runner::ReadGroundTruth(sequence));
@@ -352,8 +359,7 @@ void AddViewerOptions(CLI::App* command, RunArgs* args) {
                    "map, keyframes, trajectory, the current image with its keypoints and mask, "
                    "pause / step / resume. When the run ends the page stays until Ctrl-C "
                    "(docs/RUNNING.md; over SSH: ssh -L 8765:127.0.0.1:8765 HOST)")
-      ->expected(0, 1)
-      ->check(CLI::Range(0, 65535));
+      ->expected(0, 1);
   command
       ->add_option("--viewer-host", args->viewer_host,
                    "Address the viewer listens on. The default 127.0.0.1 keeps it to this "
