@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
   moslam::app::AddVocabCommand(app);
   moslam::app::AddTrainCommand(app);
   moslam::app::AddMapCommand(app);
+  moslam::app::AddViewCommand(app);
 
   try {
     app.parse(argc, argv);

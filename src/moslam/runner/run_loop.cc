@@ -253,6 +253,9 @@ void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& mas
                   record.timestamp, StateName(record.report.state), record.report.num_features,
                   record.report.num_inliers, record.report.times.total_ms);
     result->frames.push_back(std::move(record));
+    if (options.observer != nullptr) {
+      options.observer->OnFrame(result->frames.back(), frame->input, tracker);
+    }
     if (progress != nullptr) progress->Update(result->frames.size());
   }
 }

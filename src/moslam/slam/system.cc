@@ -28,6 +28,7 @@
 #include "moslam/slam/local_mapper.h"
 #include "moslam/slam/loop_closer.h"
 #include "moslam/slam/moving_regions.h"
+#include "moslam/slam/system_view.h"
 #include "moslam/slam/tracker.h"
 #include "moslam/util/bounded_queue.h"
 #include "moslam/util/error.h"
@@ -299,6 +300,8 @@ class System::Impl : public KeyFrameSink {
                  options_.localization ? " (localization only)" : "");
   }
 
+  void View(SystemView* view) { FillSystemView(map_, tracker_, &view_memory_, view); }
+
   void SaveMap(const std::string& path) {
     Finish();
     const auto t0 = std::chrono::steady_clock::now();
@@ -491,6 +494,7 @@ class System::Impl : public KeyFrameSink {
   std::optional<geometry::SE3> last_T_cam_world_, velocity_;
   int frame_index_ = 0;
   int initialized_frame_ = -1;
+  ViewMemory view_memory_;  // System::View's, untouched while nobody watches
 };
 
 System::System(const SystemOptions& options) : impl_(std::make_unique<Impl>(options)) {}
@@ -501,5 +505,6 @@ eval::Trajectory System::CameraTrajectory() const { return impl_->CameraTrajecto
 eval::Trajectory System::KeyFrameTrajectory() const { return impl_->KeyFrameTrajectory(); }
 MapSummary System::Summary() const { return impl_->Summary(); }
 void System::SaveMap(const std::string& path) { impl_->SaveMap(path); }
+void System::View(SystemView* view) { impl_->View(view); }
 
 }  // namespace moslam::slam

@@ -10,9 +10,11 @@
 //   eval::Trajectory trajectory = system.CameraTrajectory();
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -202,6 +204,30 @@ struct MapSummary {
   double mapping_ms_total = 0.0;
 };
 
+// A viewer's copy of the system after a frame (viewer/, issue 26): plain data, made only when
+// System::View is called, so that a run without a viewer pays nothing for it.
+enum class ViewPointState : uint8_t {
+  kMap = 0,            // in the map
+  kLocal = 1,          // in the local map the last frame was tracked against
+  kTracked = 2,        // matched by the last frame (an inlier)
+  kNew = 3,            // made from one of the two newest keyframes (still on probation)
+  kErasedMovable = 4,  // erased after movable-object evidence (a mask or free space showed it)
+  kErasedOther = 5,    // erased otherwise: culled, fused, or judged moving by its residuals
+};
+enum class ViewKeypointKind : uint8_t {
+  kUntracked = 0,  // matched no map point
+  kTracked = 1,    // matched a map point (an inlier)
+  kNearMask = 2,   // next to the movable mask: may track, seeds no point
+  kMoving = 3,     // seen moving against an earlier frame
+};
+struct SystemView {
+  std::vector<float> points;          // x, y, z (world, metres) per map point, then the erased ones
+  std::vector<uint8_t> point_states;  // ViewPointState per point of `points`
+  std::vector<geometry::SE3> keyframes;  // T_world_cam of each keyframe, by id
+  std::vector<float> keypoints;          // x, y (pixels) per keypoint of the last frame
+  std::vector<uint8_t> keypoint_kinds;   // ViewKeypointKind per keypoint
+};
+
 class System {
  public:
   explicit System(const SystemOptions& options);
@@ -218,6 +244,10 @@ class System {
   eval::Trajectory CameraTrajectory() const;
   eval::Trajectory KeyFrameTrajectory() const;
   MapSummary Summary() const;
+  // Fills *view after the last Track(); call it from the tracking thread (it reads the tracker's
+  // scratch state) and only when someone watches. Points erased since the previous call are
+  // kept in later views (the newest 20000), with why they went.
+  void View(SystemView* view);
   // Finishes (as Finish()) and writes the whole map to `path` (mapio/map_file.h: a temporary file
   // renamed when complete). InputError when it cannot be written.
   void SaveMap(const std::string& path);
