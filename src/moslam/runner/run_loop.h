@@ -73,7 +73,6 @@ struct RunOptions {
   // with 6 decimals, as KeyFrameTrajectory.txt prints it; 255 = movable) as the run goes, and not
   // kept in the records. A keyframe without a mask gets no file. The folder must exist.
   std::string keyframe_mask_folder;
-  void Check() const;  // InputError naming the field
   FrameObserver* observer = nullptr;  // nullptr: nobody watches (FrameObserver)
   void Check() const;                 // InputError naming the field
 };
