@@ -77,22 +77,23 @@ cv::Mat RenderTopView(const std::vector<Voxel>& voxels, double resolution,
   const double ppm = options.width / extent0;  // pixels per metre
   const int height = std::clamp(static_cast<int>(std::ceil(extent1 * ppm)) + 24, 16, 16384);
   cv::Mat image(height, options.width, CV_8UC3, cv::Scalar::all(255));
-  // Far from the viewer first. The viewer looks along +h from the side of small h (y down: from
-  // above), so the largest h is drawn first.
+  // Height above the lowest voxel: drawn lowest first, so what is on top stays visible.
+  const auto height_of = [&](const Voxel& v) {
+    return options.up_positive ? v.centre[h] - lo[h] : hi[h] - v.centre[h];
+  };
   std::vector<size_t> order(voxels.size());
   std::iota(order.begin(), order.end(), size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](size_t i, size_t j) {
-    return options.nearest_on_top ? voxels[i].centre[h] > voxels[j].centre[h]
-                                  : voxels[i].centre[h] < voxels[j].centre[h];
-  });
-  const int side = std::max(1, static_cast<int>(std::ceil(resolution * ppm)));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t i, size_t j) { return height_of(voxels[i]) < height_of(voxels[j]); });
+  // One pixel more than a voxel spans: truncated positions otherwise leave seams between voxels.
+  const int side = static_cast<int>(std::ceil(resolution * ppm)) + 1;
   const double span = std::max(1e-6, static_cast<double>(hi[h] - lo[h]));
   for (size_t i : order) {
     const Voxel& v = voxels[i];
     const int u = static_cast<int>((v.centre[a0] - lo[a0] + margin) * ppm);
     // Image rows run against a1, so that a1 (z: the first camera's forward) points up.
     const int r = static_cast<int>((hi[a1] - v.centre[a1] + margin) * ppm);
-    const double shade = 0.55 + 0.45 * (hi[h] - v.centre[h]) / span;  // higher is brighter
+    const double shade = 0.55 + 0.45 * height_of(v) / span;  // higher is brighter
     const cv::Scalar colour(v.b * shade, v.g * shade, v.r * shade);
     cv::rectangle(image, cv::Rect(u - side / 2, r - side / 2, side, side), colour, cv::FILLED);
   }

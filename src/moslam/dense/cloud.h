@@ -20,11 +20,12 @@ std::string PlyBytes(const std::vector<Voxel>& voxels);
 
 struct RenderOptions {
   int width = 960;  // pixels of the picture (> 0); the height follows the map's extent
-  // The axis the picture looks along, in the map's frame: 1 = from above for a camera whose y axis
-  // points down (TUM, KITTI, the generator: y is the vertical of the first camera).
+  // The map's vertical axis (0, 1, 2 = x, y, z) and its upward sign: the picture looks down it.
+  // The default suits a map in the first camera's frame (y points down). `moslam map export`
+  // sets them from the keyframes' orientations (their image's up direction, on average).
   int up_axis = 1;
-  bool nearest_on_top = true;  // draw the voxel nearest the viewer last
-  void Check() const;          // InputError naming the field
+  bool up_positive = false;
+  void Check() const;  // InputError naming the field
 };
 
 // An orthographic view of the voxels along `up_axis`, each drawn as a square of its colour

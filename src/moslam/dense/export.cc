@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -150,6 +151,19 @@ cv::Mat RunMask(const std::string& run_dir, double stamp) {
   return io::LoadGreyImage(path);
 }
 
+// The generator's noise-free depth (`moslam synth --exact-depth`: depth_gt/ beside depth/), when
+// it was written: Kinect-type noise of 1-2 cm at 3-4 m makes a surface two or three 5 cm voxels
+// thick, so the truth is better drawn without it.
+std::optional<cv::Mat> ExactDepth(const Input& in, const io::FrameEntry& frame) {
+  if (frame.depth.empty()) return std::nullopt;
+  std::string path = frame.depth;
+  const size_t at = path.rfind("/depth/");
+  if (at == std::string::npos) return std::nullopt;
+  path.replace(at, 7, "/depth_gt/");
+  if (!fs::exists(path)) return std::nullopt;
+  return io::LoadDepthImage(path, in.settings.depth_map_factor);
+}
+
 // The ground truth's voxel sets: where the people were in any frame (ground-truth masks, every
 // frame, at its ground-truth pose) and the static scene the keyframes saw.
 struct TruthSets {
@@ -175,6 +189,7 @@ TruthSets BuildTruth(const Input& in, const eval::Trajectory& gt,
     const auto pose = pose_at(frame.timestamp);
     if (!pose) continue;
     DepthView view = LoadView(in, frame, stereo);
+    if (const auto exact = ExactDepth(in, frame)) view.depth = *exact;
     view.T_world_cam = *pose;
     view.mask = source->MaskFor(frame, view.depth.size()).mask;
     sets.people.Add(BackProject(in.intrinsics, exact, view, MaskUse::kOnly, nullptr, nullptr));
@@ -220,16 +235,39 @@ nlohmann::json ReportJson(const ExportOptions& options, const ExportResult& r) {
   return j;
 }
 
+// The map's vertical: the keyframes' image up direction (-y of the camera), averaged; its
+// largest component names the axis.
+void SetUpAxis(const std::vector<geometry::SE3>& poses, RenderOptions* render) {
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();
+  for (const geometry::SE3& T : poses) up -= T.rotation_matrix().col(1);
+  if (up.norm() == 0.0) return;
+  Eigen::Index axis = 0;
+  up.cwiseAbs().maxCoeff(&axis);
+  render->up_axis = static_cast<int>(axis);
+  render->up_positive = up[axis] > 0.0;
+}
+
 void WriteOutputs(const DenseFusion& fusion, const std::vector<Voxel>& voxels,
-                  const ExportOptions& options, ExportResult* r) {
+                  const std::vector<geometry::SE3>& poses, const ExportOptions& options,
+                  ExportResult* r) {
   r->octree = (fs::path(options.out) / "map.bt").string();
   r->cloud = (fs::path(options.out) / "map.ply").string();
   r->picture = (fs::path(options.out) / "map_top.png").string();
   r->report = (fs::path(options.out) / "export.json").string();
   fusion.WriteBinary(r->octree);
   WritePly(voxels, r->cloud);
+  // As a floor plan is drawn: cut above the cameras (0.5 m over the highest keyframe), or an
+  // indoor map shows its ceiling.
+  const int h = options.render.up_axis;
+  const double sign = options.render.up_positive ? 1.0 : -1.0;
+  double top = -std::numeric_limits<double>::infinity();
+  for (const geometry::SE3& T : poses) top = std::max(top, sign * T.translation()[h] + 0.5);
+  std::vector<Voxel> below;
+  for (const Voxel& v : voxels) {
+    if (sign * v.centre[h] <= top) below.push_back(v);
+  }
   std::vector<uint8_t> png;
-  cv::imencode(".png", RenderTopView(voxels, options.fusion.resolution, options.render), png);
+  cv::imencode(".png", RenderTopView(below, options.fusion.resolution, options.render), png);
   WriteFileAtomically(r->picture,
                       std::string_view(reinterpret_cast<const char*>(png.data()), png.size()),
                       "picture");
@@ -263,6 +301,7 @@ ExportResult ExportDenseMap(const ExportOptions& given) {
   if (options.masks == ExportMasks::kSource) {
     source = runner::MakeMaskSource(options.mask_source, in.sequence);
   }
+  SetUpAxis(poses, &options.render);
   fs::create_directories(options.out);
   DenseFusion fusion(in.intrinsics, options.fusion);
   ExportResult r;
@@ -289,7 +328,7 @@ ExportResult ExportDenseMap(const ExportOptions& given) {
     const TruthSets truth = BuildTruth(in, *gt, frames, options.fusion, options.stereo);
     r.scores = ScoreDenseMap(voxels, truth.people, truth.statics);
   }
-  WriteOutputs(fusion, voxels, options, &r);
+  WriteOutputs(fusion, voxels, poses, options, &r);
   r.total_s = Seconds(start);
   WriteFileAtomically(r.report, ReportJson(options, r).dump(2) + "\n", "export report");
   return r;
