@@ -8,17 +8,22 @@ PACKAGES=(
   g++ cmake make pkg-config clang-format
   # libraries (README "Dependencies" says why each)
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
-  libceres-dev libcereal-dev
+  libceres-dev libcereal-dev liboctomap-dev
   libopencv-contrib-dev libtorch-dev
   # the BLAS libtorch and CHOLMOD get through Debian's alternatives (ATLAS otherwise; README)
   libopenblas0-openmp
   libosmesa6-dev
+  # the live viewer (src/moslam/viewer): HTTP/WebSocket server (header only, on standalone asio)
+  # and three.js served from its installed files
+  libwebsocketpp-dev libasio-dev libjs-three
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # the bad-input corpus (tools/bad_input_corpus, docs/ROBUSTNESS.md): images and .npy files
   python3-numpy python3-opencv
   # the parsers' fuzzers (scripts/fuzz.sh): clang and its libFuzzer and sanitizer runtimes
   clang libclang-rt-14-dev
+  # the viewer's browser test (viewer/browser_test skips without it)
+  chromium
   # the Python module (python/) and its tests
   pybind11-dev python3-dev python3-pytest
 )

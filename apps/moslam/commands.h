@@ -42,5 +42,7 @@ void AddSegmentCommand(CLI::App& app);
 void AddSegEvalCommand(CLI::App& app);
 void AddVocabCommand(CLI::App& app);
 void AddTrainCommand(CLI::App& app);
+void AddMapCommand(CLI::App& app);
+void AddViewCommand(CLI::App& app);
 
 }  // namespace moslam::app

@@ -61,6 +61,8 @@ int main(int argc, char** argv) {
   moslam::app::AddSegEvalCommand(app);
   moslam::app::AddVocabCommand(app);
   moslam::app::AddTrainCommand(app);
+  moslam::app::AddMapCommand(app);
+  moslam::app::AddViewCommand(app);
 
   try {
     app.parse(argc, argv);

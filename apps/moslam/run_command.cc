@@ -1,6 +1,7 @@
 // `moslam run`: runs the SLAM system over a data set and writes trajectories, a per-frame log and
 // a summary (runner/outputs.h). The loop itself is moslam::runner (RunSequence, tested with a fake
 // tracker); this file maps options and adapts slam::System to runner::Tracker.
+#include <atomic>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -25,6 +26,8 @@
 #include "moslam/runner/tracker.h"
 #include "moslam/semantic/mask_refine.h"
 #include "moslam/util/error.h"
+#include "moslam/util/strings.h"
+#include "moslam/viewer/live_viewer.h"
 #if MOSLAM_HAVE_SLAM
 #include "moslam/slam/system.h"
 #endif
@@ -77,6 +80,13 @@ struct RunArgs {
   std::string save_map;
   std::string load_map;
   bool localization = false;
+  bool save_keyframe_masks = false;
+  // The live viewer (issue 26; src/moslam/viewer): the port given with --viewer, if given.
+  std::vector<std::string> viewer;  // CLI11 gives [] or [""] for --viewer alone
+  bool viewer_on = false;
+  std::string viewer_host = viewer::ServerOptions{}.host;
+  bool viewer_paused = false;
+  bool viewer_exit = false;
 };
 
 // The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
@@ -115,6 +125,10 @@ class SystemTracker : public runner::Tracker {
   eval::Trajectory CameraTrajectory() const override { return system_.CameraTrajectory(); }
   eval::Trajectory KeyFrameTrajectory() const override { return system_.KeyFrameTrajectory(); }
   slam::MapSummary Summary() const override { return system_.Summary(); }
+  bool View(slam::SystemView* view) override {
+    system_.View(view);
+    return true;
+  }
 
  private:
   slam::System system_;
@@ -165,6 +179,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.completion_structure = !args.no_completion_planes;
   options.pose_consensus = !args.no_pose_consensus;
   options.young_points = args.young_points;
+  options.report_keyframe_masks = args.save_keyframe_masks;
   options.motion_cross_check = !args.no_motion_cross_check;
   options.mask_margin_px = args.mask_margin;
   options.mask_propagation_frames = args.mask_propagation;
@@ -249,6 +264,25 @@ void SetUpVideo(const RunArgs& args, const std::string& path, io::Sequence* sequ
   };
 }
 
+// The live viewer of --viewer (nullptr without it), with the data set's ground truth.
+std::unique_ptr<viewer::LiveViewer> MakeViewer(const RunArgs& args, const io::Sequence& sequence,
+                                               const std::atomic<int>* stop) {
+  if (!args.viewer_on) return nullptr;
+  viewer::ViewerOptions options;
+  options.server.host = args.viewer_host;
+  if (!args.viewer.empty() && !args.viewer.front().empty()) {
+    const auto port = ParseInt(args.viewer.front());
+    if (!port || *port < 0 || *port > 65535) {
+      ThrowInput("--viewer: '{}' is no port (0-65535)", args.viewer.front());
+    }
+    options.server.port = static_cast<int>(*port);
+  }
+  options.start_paused = args.viewer_paused;
+  auto live = std::make_unique<viewer::LiveViewer>(options, stop);
+  live->SetGroundTruth(runner::ReadGroundTruth(sequence));
+  return live;
+}
+
 void Run(const RunArgs& args) {
   const bool video = args.dataset.at(0) == "video";
   const auto format = io::ParseDatasetFormat(video ? "auto" : args.dataset.at(0));
@@ -315,12 +349,23 @@ void Run(const RunArgs& args) {
   runner::CheckGroundTruth(sequence);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
   runner::CheckOutputFolder(out);  // before the run, not after it
+  if (args.save_keyframe_masks) {
+    options.keyframe_mask_folder = out + "/keyframe_masks";
+    runner::CheckOutputFolder(options.keyframe_mask_folder);
+  }
   const std::unique_ptr<runner::Tracker> tracker = MakeTracker(settings, sequence.sensor, args);
-  // SIGINT / SIGTERM from here on end the run after the frame in hand, with its outputs written.
-  const runner::ScopedStopSignals signals;
-  options.stop = signals.flag();
-  runner::RunResult result = runner::RunSequence(sequence, *tracker, *masks, options);
-  const int signal = signals.received();
+  std::unique_ptr<viewer::LiveViewer> live;
+  runner::RunResult result;
+  int signal = 0;
+  {
+    // SIGINT / SIGTERM from here on end the run after the frame in hand, with its outputs written.
+    const runner::ScopedStopSignals signals;
+    options.stop = signals.flag();
+    live = MakeViewer(args, sequence, signals.flag());
+    options.observer = live.get();
+    result = runner::RunSequence(sequence, *tracker, *masks, options);
+    signal = signals.received();
+  }
   if (result.end == runner::RunEnd::kInterrupted) {
     result.end_message = fmt::format("interrupted by {} after {} frames",
                                      runner::SignalName(signal), result.frames.size());
@@ -331,11 +376,38 @@ void Run(const RunArgs& args) {
   }
   const std::string summary = runner::WriteRunOutputs(sequence, result, description, out);
   std::cout << summary << std::flush;
+  if (live) {
+    live->Finish(result, *tracker);
+    if (result.end != runner::RunEnd::kInterrupted && !args.viewer_exit) {
+      spdlog::info("viewer: the run has ended; {} keeps showing it until Ctrl-C", live->url());
+      live->WaitForStopSignal();
+    }
+  }
   runner::RethrowFailure(result);  // exit status and message as for an error before the run
   if (result.end == runner::RunEnd::kInterrupted) throw ExitStatus{128 + signal};
 }
 
 }  // namespace
+
+void AddViewerOptions(CLI::App* command, RunArgs* args) {
+  command
+      ->add_option("--viewer", args->viewer,
+                   "Watch the run in a browser at http://127.0.0.1:PORT/ (default port 8765): "
+                   "map, keyframes, trajectory, the current image with its keypoints and mask, "
+                   "pause / step / resume. When the run ends the page stays until Ctrl-C "
+                   "(docs/RUNNING.md; over SSH: ssh -L 8765:127.0.0.1:8765 HOST)")
+      ->expected(0, 1);
+  command
+      ->add_option("--viewer-host", args->viewer_host,
+                   "Address the viewer listens on. The default 127.0.0.1 keeps it to this "
+                   "machine; another address (0.0.0.0: all) EXPOSES THE VIEWER, with its "
+                   "pause button, TO EVERYONE WHO CAN REACH THAT PORT, with no password")
+      ->capture_default_str();
+  command->add_flag("--viewer-paused", args->viewer_paused,
+                    "Stop after the first frame until the page resumes or steps");
+  command->add_flag("--viewer-exit", args->viewer_exit,
+                    "End when the run ends instead of keeping the page up until Ctrl-C");
+}
 
 void AddRunCommand(CLI::App& app) {
   auto args = std::make_shared<RunArgs>();
@@ -502,7 +574,13 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--localization", args->localization,
                     "With --load-map: track and relocalize in the loaded map without changing "
                     "it (no new keyframes or points, no loop closing)");
-  command->callback([args] {
+  command->add_flag("--save-keyframe-masks", args->save_keyframe_masks,
+                    "Write each keyframe's movable mask (as its features were extracted: the "
+                    "source's mask, carried and grown) to OUT/keyframe_masks/<stamp>.png, for "
+                    "`moslam map export` to fuse the keyframes' depth without the movable objects");
+  AddViewerOptions(command, args.get());
+  command->callback([args, command] {
+    args->viewer_on = command->count("--viewer") > 0;
     if (args->quiet) spdlog::set_level(std::max(spdlog::get_level(), spdlog::level::warn));
     Run(*args);
   });

@@ -57,6 +57,10 @@ def test_video_tracks_as_the_image_folder(grey_frames, moslam_bin, tmp_path):
     assert from_video.shape == from_folder.shape
     np.testing.assert_allclose(from_video[:, 0], from_folder[:, 0], atol=1e-3)  # stamps
     assert np.abs(from_video[:, 1:] - from_folder[:, 1:]).max() < 1e-3  # metres (map units)
+    # A video run has no depth: `moslam map export` says so instead of reading it as a data set.
+    done = subprocess.run([moslam_bin, "map", "export", str(tmp_path / "video")],
+                          capture_output=True, text=True)
+    assert done.returncode != 0 and "a video run is monocular" in done.stderr, done.stderr
 
 
 def test_bad_video_files_are_clear_errors(moslam_bin, tmp_path):

@@ -268,6 +268,20 @@ void LoadMap(const std::string& path, const MapIdentity& expected, map::Map* int
   ParseMap(bytes, path, expected, into);
 }
 
+MapIdentity ReadMapIdentity(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw InputError(path + ": cannot open the map file");
+  // The identity is the body's first record; a few hundred bytes hold it.
+  std::string bytes(kPrefixBytes + 4096, '\0');
+  file.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  bytes.resize(static_cast<size_t>(file.gcount()));
+  if (bytes.size() <= kPrefixBytes || std::memcmp(bytes.data(), kMapMagic, sizeof kMapMagic) != 0) {
+    throw InputError(path + ": not a moslam map file (no MOSLAMAP magic at byte 0)");
+  }
+  Reader in(path, bytes.data() + kPrefixBytes, bytes.size() - kPrefixBytes, kPrefixBytes);
+  return ReadIdentity(&in);
+}
+
 MapFileStats StatsOf(const map::Map& map, size_t bytes) {
   MapFileStats stats;
   stats.bytes = bytes;

@@ -74,6 +74,10 @@ void ParseMap(const std::string& bytes, const std::string& path, const MapIdenti
               map::Map* into);
 // Reads `path` and ParseMap's it; takes into->mutex() itself.
 void LoadMap(const std::string& path, const MapIdentity& expected, map::Map* into);
+// The identity a map file says it was made with, for readers that use no camera or vocabulary
+// of their own (`moslam view` draws the points and keyframes): LoadMap(path, ReadMapIdentity(path),
+// ...) then loads any good file. InputError as LoadMap for a file too short or not a map.
+MapIdentity ReadMapIdentity(const std::string& path);
 
 // Per-file facts for logs and reports: counts of what the body holds.
 struct MapFileStats {

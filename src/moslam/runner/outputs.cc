@@ -187,18 +187,14 @@ void WriteFramesCsv(const RunResult& result, const std::string& path) {
   WriteFileAtomically(path, out, "per-frame log");
 }
 
-namespace {
-
-// The ground truth as EvaluateRun compares with it: with the stamps of times.txt when it has none.
 eval::Trajectory ReadGroundTruth(const io::Sequence& sequence) {
+  if (!sequence.ground_truth_path) return {};
   eval::Trajectory gt = eval::ReadTrajectory(*sequence.ground_truth_path);
   const std::string times = (fs::path(sequence.root) / "times.txt").string();
   std::error_code ec;
   if (!gt.has_timestamps() && fs::exists(times, ec)) eval::AttachTimes(times, &gt);
   return gt;
 }
-
-}  // namespace
 
 void CheckGroundTruth(const io::Sequence& sequence) {
   if (!sequence.ground_truth_path) return;

@@ -60,6 +60,10 @@ struct RunAte {
   std::string text;     // eval::FormatAteReport
 };
 
+// The data set's ground truth as EvaluateRun compares with it (with the stamps of <root>/times.txt
+// when it has none); empty without one. InputError naming a broken file.
+eval::Trajectory ReadGroundTruth(const io::Sequence& sequence);
+
 // Reads sequence.ground_truth_path (and <root>/times.txt for a ground truth without stamps) as
 // EvaluateRun will, so that a broken file fails before the run, not as a warning after it:
 // InputError naming the file (and line). Does nothing without a ground truth.

@@ -1,14 +1,20 @@
 #include "moslam/runner/run_loop.h"
 
 #include <chrono>
+#include <filesystem>
 #include <memory>
 #include <optional>
+#include <string_view>
 #include <thread>
+#include <vector>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "moslam/runner/segmentation_stage.h"
+#include "moslam/util/atomic_file.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
 #include "moslam/util/process.h"
@@ -96,6 +102,9 @@ void RunOptions::Check() const {
     ThrowInput("run.image_size: must not be negative, got {}x{}", image_size.width,
                image_size.height);
   }
+  if (!keyframe_mask_folder.empty() && !std::filesystem::is_directory(keyframe_mask_folder)) {
+    ThrowInput("run.keyframe_mask_folder: no folder {}", keyframe_mask_folder);
+  }
 }
 
 LoadedFrame LoadImages(const io::FrameEntry& frame, const RunOptions& options) {
@@ -162,6 +171,17 @@ bool Skipped(const RunOptions& options, size_t index) {
          (!options.skip->last || index < *options.skip->last);
 }
 
+// A keyframe's mask as <stamp>.png, 0 / 255, written whole or not at all.
+void WriteKeyFrameMask(const std::string& folder, double timestamp, const cv::Mat& mask) {
+  cv::Mat binary;
+  cv::compare(mask, 0, binary, cv::CMP_NE);
+  std::vector<uint8_t> png;
+  const std::string path = fmt::format("{}/{:.6f}.png", folder, timestamp);
+  if (!cv::imencode(".png", binary, png)) ThrowInput("cannot encode the keyframe mask {}", path);
+  WriteFileAtomically(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()),
+                      "keyframe mask");
+}
+
 bool StopRequested(const RunOptions& options) {
   return options.stop != nullptr && options.stop->load() != 0;
 }
@@ -225,11 +245,19 @@ void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& mas
     record.mask_fraction = frame->mask_fraction;
     record.segmented = due(*frame);
     record.report = TrackFrame(tracker, *frame);
+    if (!options.keyframe_mask_folder.empty() && !record.report.keyframe_mask.empty()) {
+      WriteKeyFrameMask(options.keyframe_mask_folder, record.timestamp,
+                        record.report.keyframe_mask);
+    }
+    record.report.keyframe_mask.release();
     record.rss_mb = static_cast<double>(ResidentSetBytes()) / (1 << 20);
     spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,
                   record.timestamp, StateName(record.report.state), record.report.num_features,
                   record.report.num_inliers, record.report.times.total_ms);
     result->frames.push_back(std::move(record));
+    if (options.observer != nullptr) {
+      options.observer->OnFrame(result->frames.back(), frame->input, tracker);
+    }
     if (progress != nullptr) progress->Update(result->frames.size());
   }
 }

@@ -31,6 +31,19 @@ struct FrameRange {
 // InputError (naming `option`) for anything else.
 FrameRange ParseFrameRange(const std::string& text, const std::string& option = "--frames");
 
+struct FrameRecord;
+
+// Watches the run from the tracking thread (the live viewer, viewer/live_viewer.h): called after
+// each tracked frame with its record, the input the tracker got (images and mask) and the
+// tracker, whose View() it may ask for. It must hand over and return quickly: it runs between
+// frames, on tracking's time. It may block while its user paused the run: that is the pause.
+class FrameObserver {
+ public:
+  virtual ~FrameObserver() = default;
+  virtual void OnFrame(const FrameRecord& record, const slam::FrameInput& input,
+                       Tracker& tracker) = 0;
+};
+
 struct RunOptions {
   FrameRange frames;  // sub-range to run; checked against the sequence in RunSequence
   // Frames (indices) inside `frames` that are not given to the tracker at all, as if the camera
@@ -60,7 +73,13 @@ struct RunOptions {
   // (io::LoadFrameImages with `colour` and `depth_factor`). A video (`moslam run --dataset video`)
   // decodes its frames here (io::VideoReader). Throws InputError naming the file and frame.
   std::function<io::FrameImages(const io::FrameEntry&)> read_images;
-  void Check() const;  // InputError naming the field
+  // When set, each keyframe's movable mask (slam::FrameReport::keyframe_mask, which the tracker
+  // reports with SystemOptions::report_keyframe_masks) is written there as <stamp>.png (the stamp
+  // with 6 decimals, as KeyFrameTrajectory.txt prints it; 255 = movable) as the run goes, and not
+  // kept in the records. A keyframe without a mask gets no file. The folder must exist.
+  std::string keyframe_mask_folder;
+  FrameObserver* observer = nullptr;  // nullptr: nobody watches (FrameObserver)
+  void Check() const;                 // InputError naming the field
 };
 
 // How a run ended.

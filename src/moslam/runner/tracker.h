@@ -17,6 +17,13 @@ class Tracker {
   virtual eval::Trajectory CameraTrajectory() const = 0;
   virtual eval::Trajectory KeyFrameTrajectory() const = 0;
   virtual slam::MapSummary Summary() const = 0;
+  // A viewer's copy of the tracker's state after the last Track() (slam::System::View), asked
+  // for from the tracking thread only while a viewer watches. false: this tracker has none
+  // (fakes), and the viewer shows the numbers and the image only.
+  virtual bool View(slam::SystemView* view) {
+    (void)view;
+    return false;
+  }
 };
 
 // "not_initialized", "ok", "lost" (slam::ToString lives in the SLAM core, which runner does not

@@ -28,6 +28,7 @@
 #include "moslam/slam/local_mapper.h"
 #include "moslam/slam/loop_closer.h"
 #include "moslam/slam/moving_regions.h"
+#include "moslam/slam/system_view.h"
 #include "moslam/slam/tracker.h"
 #include "moslam/util/bounded_queue.h"
 #include "moslam/util/error.h"
@@ -241,6 +242,7 @@ class System::Impl : public KeyFrameSink {
     report.num_matches = outcome.num_matches;
     report.num_inliers = outcome.num_inliers;
     report.new_keyframe = outcome.new_keyframe;
+    if (options_.report_keyframe_masks && outcome.new_keyframe) report.keyframe_mask = mask;
     report.relocalized = outcome.relocalized;
     if (outcome.relocalized) ++relocalizations_;
     report.recovered = outcome.recovered;
@@ -297,6 +299,8 @@ class System::Impl : public KeyFrameSink {
                  map_.keyframes().size(), map_.points().size(), MsSince(t0),
                  options_.localization ? " (localization only)" : "");
   }
+
+  void View(SystemView* view) { FillSystemView(map_, tracker_, &view_memory_, view); }
 
   void SaveMap(const std::string& path) {
     Finish();
@@ -500,6 +504,7 @@ class System::Impl : public KeyFrameSink {
   std::optional<geometry::SE3> last_T_cam_world_, velocity_;
   int frame_index_ = 0;
   int initialized_frame_ = -1;
+  ViewMemory view_memory_;  // System::View's, untouched while nobody watches
 };
 
 System::System(const SystemOptions& options) : impl_(std::make_unique<Impl>(options)) {}
@@ -513,5 +518,6 @@ std::vector<Eigen::Vector3d> System::MapPointPositions() const {
   return impl_->MapPointPositions();
 }
 void System::SaveMap(const std::string& path) { impl_->SaveMap(path); }
+void System::View(SystemView* view) { impl_->View(view); }
 
 }  // namespace moslam::slam

@@ -10,6 +10,7 @@
 //   eval::Trajectory trajectory = system.CameraTrajectory();
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -129,6 +130,10 @@ struct SystemOptions {
   // relocalized when lost, but no keyframe or map point is added or erased and loop closing is
   // off, so the map stays as loaded (moslam run --localization). Needs load_map.
   bool localization = false;
+  // Each new keyframe's report carries the movable mask its features were extracted with
+  // (FrameReport::keyframe_mask), so that the keyframes' depth can later be fused without the
+  // movable objects (moslam run --save-keyframe-masks, moslam map export). Off: nothing is kept.
+  bool report_keyframe_masks = false;
   void Check() const;  // InputError naming the field
 };
 
@@ -173,6 +178,10 @@ struct FrameReport {
   // run, whether the map levels off once the place is mapped (frames.csv, docs/ROBUSTNESS.md).
   int map_keyframes = 0;
   int map_points = 0;
+  // On a new keyframe with SystemOptions::report_keyframe_masks: the frame's movable mask as the
+  // extractor got it (the network's, united with the carried one and grown over depth; CV_8UC1,
+  // non-zero = movable), empty when the frame had none. Shares the tracker's buffer: read-only.
+  cv::Mat keyframe_mask;
 };
 
 struct MapSummary {
@@ -195,6 +204,30 @@ struct MapSummary {
   double mapping_ms_total = 0.0;
 };
 
+// A viewer's copy of the system after a frame (viewer/, issue 26): plain data, made only when
+// System::View is called, so that a run without a viewer pays nothing for it.
+enum class ViewPointState : uint8_t {
+  kMap = 0,            // in the map
+  kLocal = 1,          // in the local map the last frame was tracked against
+  kTracked = 2,        // matched by the last frame (an inlier)
+  kNew = 3,            // made from one of the two newest keyframes (still on probation)
+  kErasedMovable = 4,  // erased after movable-object evidence (a mask or free space showed it)
+  kErasedOther = 5,    // erased otherwise: culled, fused, or judged moving by its residuals
+};
+enum class ViewKeypointKind : uint8_t {
+  kUntracked = 0,  // matched no map point
+  kTracked = 1,    // matched a map point (an inlier)
+  kNearMask = 2,   // next to the movable mask: may track, seeds no point
+  kMoving = 3,     // seen moving against an earlier frame
+};
+struct SystemView {
+  std::vector<float> points;          // x, y, z (world, metres) per map point, then the erased ones
+  std::vector<uint8_t> point_states;  // ViewPointState per point of `points`
+  std::vector<geometry::SE3> keyframes;  // T_world_cam of each keyframe, by id
+  std::vector<float> keypoints;          // x, y (pixels) per keypoint of the last frame
+  std::vector<uint8_t> keypoint_kinds;   // ViewKeypointKind per keypoint
+};
+
 class System {
  public:
   explicit System(const SystemOptions& options);
@@ -213,6 +246,10 @@ class System {
   MapSummary Summary() const;
   // The world positions of the map points not erased (api::Slam::MapPoints, the Python module).
   std::vector<Eigen::Vector3d> MapPointPositions() const;
+  // Fills *view after the last Track(); call it from the tracking thread (it reads the tracker's
+  // scratch state) and only when someone watches. Points erased since the previous call are
+  // kept in later views (the newest 20000), with why they went.
+  void View(SystemView* view);
   // Finishes (as Finish()) and writes the whole map to `path` (mapio/map_file.h: a temporary file
   // renamed when complete). InputError when it cannot be written.
   void SaveMap(const std::string& path);

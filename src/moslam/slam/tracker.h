@@ -158,14 +158,22 @@ class Tracker {
   // Monocular: initial maps rejected after bundle adjustment (ORB-SLAM2 resets then).
   int rejected_initializations() const { return rejected_initializations_; }
 
- private:
   struct CurrentFrame {
     feature::Frame frame;
     geometry::SE3 T_cam_world;
     std::vector<std::shared_ptr<map::MapPoint>> points;  // per keypoint
     std::vector<bool> outlier;                           // per keypoint
   };
+  // What a viewer draws of the last Track() (System::View): its frame with the map point each
+  // keypoint matched (a tracked frame becomes the last frame, its outliers dropped; a lost one
+  // stays current), and the local map it was tracked against. Read in the tracking thread; the
+  // points' fields under Map::mutex().
+  const CurrentFrame& viewed_frame() const {
+    return current_.frame.keypoints.empty() ? last_ : current_;
+  }
+  const std::vector<std::shared_ptr<map::MapPoint>>& local_points() const { return local_points_; }
 
+ private:
   bool Initialize();
   // Monocular initialization (tracker_mono.cc).
   TrackOutcome InitializeMonocular();

@@ -1,0 +1,274 @@
+// The viewer in a real browser (issue 26): `moslam run --viewer` on a short synthetic sequence,
+// the page loaded in headless Chromium, and the page's own state (window.moslam, read through the
+// DevTools protocol) checked against the run's summary.json; pause and step are pressed on the
+// page's buttons. Skips when chromium is not installed.
+//
+// Environment: MOSLAM_VIEWER_DATASET=DIR runs an existing TUM-layout folder (with settings.yaml)
+// instead of a generated one; MOSLAM_VIEWER_SCREENSHOT=FILE.png saves the page while paused
+// mid-run (docs/ screenshots).
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "moslam/testing/shared_data.h"
+#include "moslam/viewer/test_client.h"
+
+extern char** environ;
+
+namespace moslam::viewer {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+std::string FindOnPath(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::string dirs = path != nullptr ? path : "/usr/bin";
+  size_t start = 0;
+  while (start <= dirs.size()) {
+    const size_t end = std::min(dirs.find(':', start), dirs.size());
+    const fs::path candidate = fs::path(dirs.substr(start, end - start)) / name;
+    if (access(candidate.c_str(), X_OK) == 0) return candidate.string();
+    start = end + 1;
+  }
+  return "";
+}
+
+// A child process, its output in `log`; SIGTERM'd and reaped on destruction.
+class Child {
+ public:
+  Child(const std::vector<std::string>& args, const std::string& log) {
+    std::vector<char*> argv;
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    if (posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
+  }
+  ~Child() {
+    if (pid_ > 0) {
+      kill(pid_, SIGTERM);
+      Wait();
+    }
+  }
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+  bool started() const { return pid_ > 0; }
+  void Signal(int signal) { kill(pid_, signal); }
+  int Wait() {
+    int status = 0;
+    if (pid_ > 0) waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+
+ private:
+  pid_t pid_ = -1;
+};
+
+int FreePort() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
+  socklen_t size = sizeof address;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size);
+  ::close(fd);
+  return ntohs(address.sin_port);
+}
+
+// Polls `ready` every 100 ms until it holds or `seconds` pass (a test waiting on other processes).
+template <typename F>
+bool Eventually(F ready, double seconds) {
+  const auto until = Clock::now() + std::chrono::duration<double>(seconds);
+  while (Clock::now() < until) {
+    if (ready()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return ready();
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::string Base64Decode(const std::string& in) {
+  std::string out;
+  int value = 0, bits = -8;
+  for (const char c : in) {
+    const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const char* at = std::strchr(table, c);
+    if (c == '=' || at == nullptr || c == '\0') break;
+    value = (value << 6) + static_cast<int>(at - table);
+    bits += 6;
+    if (bits >= 0) {
+      out.push_back(static_cast<char>((value >> bits) & 0xff));
+      bits -= 8;
+    }
+  }
+  return out;
+}
+
+// The DevTools protocol over the page's WebSocket.
+class Page {
+ public:
+  explicit Page(const std::string& url) : socket_(url) {}
+  bool Open() { return socket_.WaitOpen(); }
+  std::string failure() { return socket_.failure(); }
+  json Call(const std::string& method, const json& params) {
+    const int id = ++id_;
+    socket_.Send(json{{"id", id}, {"method", method}, {"params", params}}.dump());
+    json reply;
+    socket_.WaitForMessage([&](const testing::WsClient::Message& m) {
+      const json j = json::parse(m.payload, nullptr, false);
+      if (j.is_discarded() || j.value("id", -1) != id) return false;
+      reply = j;
+      return true;
+    });
+    return reply;
+  }
+  json Eval(const std::string& expression) {
+    const json reply =
+        Call("Runtime.evaluate", {{"expression", expression}, {"returnByValue", true}});
+    return reply.contains("result") && reply["result"].contains("result")
+               ? reply["result"]["result"].value("value", json())
+               : json();
+  }
+  json State() {
+    const json value = Eval("JSON.stringify(window.moslam || null)");
+    return value.is_string() ? json::parse(value.get<std::string>(), nullptr, false) : json();
+  }
+  void Click(const std::string& id) { Eval("document.getElementById('" + id + "').click()"); }
+
+ private:
+  testing::WsClient socket_;
+  int id_ = 0;
+};
+
+TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
+  std::string chromium = FindOnPath("chromium");
+  if (chromium.empty()) chromium = FindOnPath("chromium-browser");
+  if (chromium.empty()) {
+    GTEST_SKIP() << "chromium is not installed (apt-get install chromium, scripts/setup.sh): "
+                    "the viewer's browser test needs it";
+  }
+  const ::moslam::testing::TempDir dir;
+  const std::string moslam = MOSLAM_BINARY;
+  std::string data = dir.path() + "/seq";
+  if (const char* given = std::getenv("MOSLAM_VIEWER_DATASET")) {
+    data = given;
+  } else {
+    Child synth(
+        {moslam, "synth", "--preset", "w_xyz", "--seed", "3", "--frames", "90", "--out", data},
+        dir.path() + "/synth.log");
+    ASSERT_EQ(synth.Wait(), 0) << ReadFile(dir.path() + "/synth.log");
+  }
+  const int port = FreePort();
+  const std::string run_dir = dir.path() + "/run";
+  Child run({moslam, "run", "--dataset", "tum", data, "--settings", data + "/settings.yaml",
+             "--mask-source", "synth-gt", "--movable", "person", "--out", run_dir, "--vocabulary",
+             "none", "--realtime", "--viewer", std::to_string(port), "--viewer-paused"},
+            dir.path() + "/run.log");
+  ASSERT_TRUE(run.started());
+  ASSERT_TRUE(Eventually([&] { return testing::HttpGet(port, "/").status == 200; }, 60))
+      << ReadFile(dir.path() + "/run.log");
+
+  const int cdp = FreePort();
+  Child browser({chromium, "--headless=new", "--no-sandbox", "--no-first-run",
+                 "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--window-size=1400,900",
+                 "--remote-allow-origins=*", "--remote-debugging-port=" + std::to_string(cdp),
+                 "--user-data-dir=" + dir.path() + "/chromium",
+                 "http://127.0.0.1:" + std::to_string(port) + "/"},
+                dir.path() + "/chromium.log");
+  std::string page_url;
+  ASSERT_TRUE(Eventually(
+      [&] {
+        const json list = json::parse(testing::HttpGet(cdp, "/json/list").body, nullptr, false);
+        if (!list.is_array()) return false;
+        for (const json& target : list) {
+          if (target.value("type", "") == "page" &&
+              target.value("url", "").find(std::to_string(port)) != std::string::npos) {
+            page_url = target.value("webSocketDebuggerUrl", "");
+          }
+        }
+        return !page_url.empty();
+      },
+      60))
+      << ReadFile(dir.path() + "/chromium.log");
+  Page page(page_url);
+  ASSERT_TRUE(page.Open()) << page_url << ": " << page.failure();
+
+  // Paused after frame 0 (--viewer-paused): the page shows it and nothing moves.
+  ASSERT_TRUE(Eventually(
+      [&] {
+        const json s = page.State();
+        return s.is_object() && s.value("connected", false) && s.value("paused", false) &&
+               s.value("frame", -1) == 0;
+      },
+      60))
+      << page.State().dump();
+  page.Click("step");
+  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) == 1; }, 30));
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  EXPECT_EQ(page.State().value("frame", -1), 1) << "a step moved more than one frame";
+
+  // Running, then paused from the page in the middle of the run: the counter stops.
+  page.Click("resume");
+  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) >= 3; }, 60));
+  page.Click("pause");
+  ASSERT_TRUE(Eventually([&] { return page.State().value("paused", false); }, 10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const int stopped_at = page.State().value("frame", -1);
+  ASSERT_FALSE(page.State().value("finished", true)) << "the run ended before the pause took";
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  EXPECT_EQ(page.State().value("frame", -1), stopped_at) << "the run went on while paused";
+  if (const char* shot = std::getenv("MOSLAM_VIEWER_SCREENSHOT")) {
+    const json reply = page.Call("Page.captureScreenshot", {{"format", "png"}});
+    std::ofstream(shot, std::ios::binary)
+        << Base64Decode(reply["result"].value("data", std::string()));
+  }
+  page.Click("step");
+  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) == stopped_at + 1; }, 30))
+      << "paused at " << stopped_at << ": " << page.State().dump();
+  page.Click("resume");
+
+  // The end: the page's own counts against summary.json.
+  ASSERT_TRUE(Eventually([&] { return page.State().value("finished", false); }, 300))
+      << ReadFile(dir.path() + "/run.log");
+  const json summary = json::parse(ReadFile(run_dir + "/summary.json"), nullptr, false);
+  ASSERT_TRUE(summary.is_object());
+  const json state = page.State();
+  EXPECT_EQ(state.value("frames", -1), summary.value("frames", -2));
+  EXPECT_EQ(state.value("keyframes", -1), summary.value("keyframes", -2));
+  EXPECT_EQ(state.value("mapPoints", -1), summary.value("map_points", -2));
+  EXPECT_EQ(state.value("trajectory", -1), summary.value("camera_poses", -2));
+  EXPECT_GT(state.value("keyframes", 0), 1);
+  EXPECT_GT(state.value("mapPoints", 0), 100);
+  EXPECT_GT(state.value("groundTruth", 0), 0);
+  EXPECT_EQ(state.value("error", std::string("?")), "") << state.dump();
+  // The run has ended and the page stays until Ctrl-C, which ends moslam with status 0.
+  run.Signal(SIGINT);
+  EXPECT_EQ(run.Wait(), 0) << ReadFile(dir.path() + "/run.log");
+}
+
+}  // namespace
+}  // namespace moslam::viewer
