@@ -73,6 +73,7 @@ void OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, OrbFeature
   CheckInputs(image, mask);
   BuildPyramid(image);
   const cv::Mat& movable = PrepareMask(mask);
+  masked_keypoints_.clear();
   // Coarse to fine, so that a level short of candidates hands its unused quota to the next finer
   // level, which has more corners.
   int carry = 0;
@@ -88,8 +89,27 @@ void OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, OrbFeature
           static_cast<float>(level.image.rows - kDetectionBorder), wanted, &level.selected);
     }
     carry = wanted - static_cast<int>(level.selected.size());
+    if (keep_masked_ && !level.masked.empty()) CollectMasked(l, wanted, movable);
   }
   Describe(features);
+}
+
+void OrbExtractor::CollectMasked(int level_index, int wanted, const cv::Mat& mask) {
+  Level& level = levels_[level_index];
+  // The threshold of each cell was chosen before the mask (DetectCandidates), so the unmasked
+  // extractor's candidates are exactly the kept ones and the masked ones together.
+  all_candidates_ = level.candidates;
+  all_candidates_.insert(all_candidates_.end(), level.masked.begin(), level.masked.end());
+  distributor_.Distribute(&all_candidates_, kDetectionBorder,
+                          static_cast<float>(level.image.cols - kDetectionBorder), kDetectionBorder,
+                          static_cast<float>(level.image.rows - kDetectionBorder), wanted,
+                          &all_selected_);
+  const float scale = scale_[level_index];
+  for (const Candidate& c : all_selected_) {
+    const int col = std::min(cvRound(c.x * scale), mask.cols - 1);
+    const int row = std::min(cvRound(c.y * scale), mask.rows - 1);
+    if (mask.ptr<uint8_t>(row)[col] != 0) masked_keypoints_.emplace_back(c.x * scale, c.y * scale);
+  }
 }
 
 void OrbExtractor::CheckInputs(const cv::Mat& image, const cv::Mat& mask) const {
@@ -142,6 +162,7 @@ const cv::Mat& OrbExtractor::PrepareMask(const cv::Mat& mask) {
 void OrbExtractor::DetectCandidates(int level_index, const cv::Mat& mask) {
   Level& level = levels_[level_index];
   level.candidates.clear();
+  level.masked.clear();
   const cv::Mat& image = level.image;
   const int width = image.cols - 2 * kDetectionBorder;
   const int height = image.rows - 2 * kDetectionBorder;
@@ -213,7 +234,10 @@ void OrbExtractor::AppendCorners(int level_index, int offset_x, int offset_y, co
     const float y = kp.pt.y + offset_y;
     const int col = std::min(cvRound(x * scale), max_col);
     const int row = std::min(cvRound(y * scale), max_row);
-    if (mask.ptr<uint8_t>(row)[col] != 0) continue;
+    if (mask.ptr<uint8_t>(row)[col] != 0) {
+      if (keep_masked_) levels_[level_index].masked.push_back({x, y, kp.response});
+      continue;
+    }
     out.push_back({x, y, kp.response});
   }
 }

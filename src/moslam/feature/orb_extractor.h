@@ -65,12 +65,23 @@ class OrbExtractor {
   // 39 pixels on a side) are empty.
   const cv::Mat& level_image(int level) const { return levels_.at(level).image; }
 
+  // What the mask took away, for a viewer (issue 26): while set, each Extract also finds, level by
+  // level, the keypoints the distribution would have kept without the mask (same quota, the
+  // masked candidates back in) that lie on masked pixels, in level-0 pixels: masked_keypoints().
+  // It costs one more distribution per level, so it stays off (the default) unless someone
+  // watches; off, the only trace of it is a flag tested per masked candidate.
+  void set_keep_masked(bool keep) { keep_masked_ = keep; }
+  bool keep_masked() const { return keep_masked_; }
+  // Of the last Extract with keep_masked() and a mask; empty otherwise.
+  const std::vector<cv::Point2f>& masked_keypoints() const { return masked_keypoints_; }
+
  private:
   struct Level {
     cv::Mat image;     // the scaled image
     cv::Mat smoothed;  // Gaussian-smoothed image for the descriptors
     std::vector<Candidate> candidates;
     std::vector<Candidate> selected;  // the distributed keypoints
+    std::vector<Candidate> masked;    // candidates the mask removed (keep_masked_ only)
   };
 
   void CheckInputs(const cv::Mat& image, const cv::Mat& mask) const;
@@ -80,6 +91,8 @@ class OrbExtractor {
   void DetectCandidates(int level, const cv::Mat& mask);
   void AppendCorners(int level, int offset_x, int offset_y, const cv::Mat& mask);
   void Describe(OrbFeatures* features);
+  // keep_masked_: the keypoints of `level` the mask took away from a quota of `wanted`.
+  void CollectMasked(int level, int wanted, const cv::Mat& mask);
 
   OrbExtractorOptions options_;
   std::vector<float> scale_, inv_scale_, sigma2_, inv_sigma2_;
@@ -91,6 +104,9 @@ class OrbExtractor {
   std::vector<cv::KeyPoint> fast_;  // cv::FAST output, reused
   std::vector<int> cell_count_;
   QuadtreeDistributor distributor_;
+  bool keep_masked_ = false;
+  std::vector<cv::Point2f> masked_keypoints_;
+  std::vector<Candidate> all_candidates_, all_selected_;  // CollectMasked's scratch
 };
 
 }  // namespace moslam::feature

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bitset>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -165,6 +166,39 @@ TEST(OrbExtractor, MaskedExtractionKeepsTheBudgetAndAvoidsTheMask) {
   int coarse = 0;
   for (const cv::KeyPoint& kp : masked.keypoints) coarse += kp.octave >= 4 ? 1 : 0;
   EXPECT_GT(coarse, 50);
+}
+
+// The viewer's "rejected by the mask" keypoints (issue 26): on the mask, about as many as the
+// unmasked extractor puts there, and asking for them changes nothing the tracker gets.
+TEST(OrbExtractor, KeepMaskedReportsWhatTheMaskTookAndChangesNothingElse) {
+  const cv::Mat image = test::TexturedImage(640, 480, 3);
+  const cv::Mat mask = test::MovableMask(image.size(), 0.3, 4);
+  OrbExtractor plain((OrbExtractorOptions()));
+  OrbExtractor watched((OrbExtractorOptions()));
+  watched.set_keep_masked(true);
+  const OrbFeatures kept = watched.Extract(image, mask);
+  EXPECT_TRUE(Identical(plain.Extract(image, mask), kept));
+  EXPECT_TRUE(plain.masked_keypoints().empty());
+  const std::vector<cv::Point2f>& masked = watched.masked_keypoints();
+  const int on_mask = CountOnMask(ExtractWith(image, cv::Mat(), 1000), mask);
+  ASSERT_GT(on_mask, 100);
+  for (const cv::Point2f& p : masked) {
+    ASSERT_NE(mask.at<uint8_t>(std::min(cvRound(p.y), mask.rows - 1),
+                               std::min(cvRound(p.x), mask.cols - 1)),
+              0)
+        << p;
+  }
+  // Each level's quota is the masked run's, so the count is close to, not equal to, the
+  // unmasked extractor's.
+  EXPECT_GT(masked.size(), 0.8 * on_mask);
+  EXPECT_LT(masked.size(), 1.2 * on_mask);
+  std::printf("on the mask: %d keypoints unmasked, %zu reported as masked\n", on_mask,
+              masked.size());
+  watched.Extract(image);  // no mask: nothing taken
+  EXPECT_TRUE(watched.masked_keypoints().empty());
+  watched.set_keep_masked(false);
+  watched.Extract(image, mask);
+  EXPECT_TRUE(watched.masked_keypoints().empty());
 }
 
 TEST(OrbExtractor, DilationGrowsTheMask) {
