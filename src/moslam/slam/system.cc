@@ -300,7 +300,16 @@ class System::Impl : public KeyFrameSink {
                  options_.localization ? " (localization only)" : "");
   }
 
-  void View(SystemView* view) { FillSystemView(map_, tracker_, &view_memory_, view); }
+  void View(SystemView* view, const ViewRequest& request) {
+    FillSystemView(map_, tracker_, request, rejected_keypoints_, &view_memory_, view);
+  }
+
+  void Watch(bool watched) {
+    watched_ = watched;
+    for (feature::OrbExtractor* e : {&left_extractor_, &init_extractor_})
+      e->set_keep_masked(watched);
+    if (!watched) rejected_keypoints_.clear();
+  }
 
   void SaveMap(const std::string& path) {
     Finish();
@@ -432,6 +441,16 @@ class System::Impl : public KeyFrameSink {
   }
 
   feature::Frame MakeFrame(const FrameInput& input, const cv::Mat& mask) {
+    feature::Frame frame = ExtractFrame(input, mask);
+    // What the mask took away, for a viewer (Watch): the extractor kept it only while watched.
+    if (watched_) {
+      const bool init = options_.sensor == io::SensorType::kMonocular && !tracker_.initialized();
+      rejected_keypoints_ = (init ? init_extractor_ : left_extractor_).masked_keypoints();
+    }
+    return frame;
+  }
+
+  feature::Frame ExtractFrame(const FrameInput& input, const cv::Mat& mask) {
     const cv::Mat grey = ToGrey(input.image, options_.settings.rgb);
     if (options_.sensor == io::SensorType::kMonocular) {
       feature::OrbExtractor* extractor =
@@ -504,7 +523,9 @@ class System::Impl : public KeyFrameSink {
   std::optional<geometry::SE3> last_T_cam_world_, velocity_;
   int frame_index_ = 0;
   int initialized_frame_ = -1;
-  ViewMemory view_memory_;  // System::View's, untouched while nobody watches
+  ViewMemory view_memory_;                       // System::View's, untouched while nobody watches
+  bool watched_ = false;                         // System::Watch
+  std::vector<cv::Point2f> rejected_keypoints_;  // of the last frame, while watched
 };
 
 System::System(const SystemOptions& options) : impl_(std::make_unique<Impl>(options)) {}
@@ -518,6 +539,7 @@ std::vector<Eigen::Vector3d> System::MapPointPositions() const {
   return impl_->MapPointPositions();
 }
 void System::SaveMap(const std::string& path) { impl_->SaveMap(path); }
-void System::View(SystemView* view) { impl_->View(view); }
+void System::View(SystemView* view, const ViewRequest& request) { impl_->View(view, request); }
+void System::Watch(bool watched) { impl_->Watch(watched); }
 
 }  // namespace moslam::slam

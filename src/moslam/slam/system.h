@@ -220,13 +220,34 @@ enum class ViewKeypointKind : uint8_t {
   kNearMask = 2,   // next to the movable mask: may track, seeds no point
   kMoving = 3,     // seen moving against an earlier frame
 };
+// What a viewer asks of System::View beyond the points, keyframes and keypoints.
+struct ViewRequest {
+  // The keyframe graph: covisibility edges and the spanning tree (SystemView::covisibility,
+  // spanning_tree); a few thousand numbers on a long run, so only when the page shows them.
+  bool graph = false;
+};
 struct SystemView {
   std::vector<float> points;          // x, y, z (world, metres) per map point, then the erased ones
   std::vector<uint8_t> point_states;  // ViewPointState per point of `points`
   std::vector<geometry::SE3> keyframes;  // T_world_cam of each keyframe, by id
   std::vector<float> keypoints;          // x, y (pixels) per keypoint of the last frame
   std::vector<uint8_t> keypoint_kinds;   // ViewKeypointKind per keypoint
+  // x, y (pixels) of the last frame's keypoints that its movable mask took away (the extractor
+  // would have kept them without the mask: feature::OrbExtractor::masked_keypoints); filled only
+  // while System::Watch is on, so that the extractor does that work only then.
+  std::vector<float> rejected_keypoints;
+  // Edges between keyframes, as indices into `keyframes`. The closed loops always (a pair per
+  // loop, the loop keyframe first, ordered by the current keyframe: the newest loop last) ...
+  std::vector<uint32_t> loops;
+  // ... the rest with ViewRequest::graph only (has_graph): i, j, weight per covisibility edge of
+  // at least 100 shared map points (what ORB-SLAM2's viewer draws), each pair in both directions,
+  // and child, parent per keyframe in the spanning tree (every keyframe but the first).
+  bool has_graph = false;
+  std::vector<uint32_t> covisibility;
+  std::vector<uint32_t> spanning_tree;
 };
+// Covisibility edges weaker than this are left out of the view (ORB-SLAM2's viewer's threshold).
+constexpr int kViewCovisibilityMinWeight = 100;
 
 class System {
  public:
@@ -249,7 +270,11 @@ class System {
   // Fills *view after the last Track(); call it from the tracking thread (it reads the tracker's
   // scratch state) and only when someone watches. Points erased since the previous call are
   // kept in later views (the newest 20000), with why they went.
-  void View(SystemView* view);
+  void View(SystemView* view, const ViewRequest& request = {});
+  // Whether a viewer watches (tracking thread, between Track calls; off at first). While on, each
+  // frame's extraction also keeps the keypoints the movable mask took away, for the next View
+  // (SystemView::rejected_keypoints); off, tracking does nothing for a viewer.
+  void Watch(bool watched);
   // Finishes (as Finish()) and writes the whole map to `path` (mapio/map_file.h: a temporary file
   // renamed when complete). InputError when it cannot be written.
   void SaveMap(const std::string& path);

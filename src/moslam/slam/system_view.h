@@ -6,6 +6,8 @@
 #include <deque>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "moslam/map/map.h"
 #include "moslam/slam/system.h"
 #include "moslam/slam/tracker.h"
@@ -25,8 +27,10 @@ struct ViewMemory {
   size_t max_erased = 20000;
 };
 
-// Fills *view from the map (locks its mutex) and the tracker's last frame (tracking thread only).
-void FillSystemView(const map::Map& map, const Tracker& tracker, ViewMemory* memory,
-                    SystemView* view);
+// Fills *view from the map (locks its mutex) and the tracker's last frame (tracking thread only);
+// `rejected`: the keypoints the last frame's mask took away (level-0 pixels; empty when nobody
+// watched while it was extracted).
+void FillSystemView(const map::Map& map, const Tracker& tracker, const ViewRequest& request,
+                    const std::vector<cv::Point2f>& rejected, ViewMemory* memory, SystemView* view);
 
 }  // namespace moslam::slam

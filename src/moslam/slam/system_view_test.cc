@@ -1,0 +1,157 @@
+// System::View, the viewer's copy of the system (issue 26), on a short synthetic walking sequence
+// (moslam synth w_xyz: people walking in front of a moving RGB-D camera, their exact masks given):
+// the copy agrees with the map's own counts, its keyframe edges are consistent, and the keypoints
+// the mask took away lie on the mask and are kept only while someone watches.
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "moslam/slam/run_dataset.h"
+#include "moslam/slam/system.h"
+#include "moslam/synth/generator.h"
+#include "moslam/testing/shared_data.h"
+
+namespace moslam::slam {
+namespace {
+
+constexpr int kFrames = 60;
+constexpr int kWatchedUntil = 50;  // Watch(false) after this frame
+
+struct Counts {
+  size_t in_map = 0, erased = 0;
+};
+
+Counts CountPoints(const SystemView& view) {
+  Counts counts;
+  for (uint8_t state : view.point_states) {
+    EXPECT_LE(state, static_cast<uint8_t>(ViewPointState::kErasedOther));
+    (state >= static_cast<uint8_t>(ViewPointState::kErasedMovable) ? counts.erased
+                                                                   : counts.in_map)++;
+  }
+  return counts;
+}
+
+// Edges by index into view.keyframes: in range, covisibility as heavy as asked and the same both
+// ways, one parent per keyframe but the first. Returns the number of undirected covisibility
+// edges.
+size_t CheckEdges(const SystemView& view) {
+  const uint32_t n = static_cast<uint32_t>(view.keyframes.size());
+  EXPECT_EQ(view.loops.size() % 2, 0u);
+  for (uint32_t k : view.loops) EXPECT_LT(k, n);
+  if (!view.has_graph) {
+    EXPECT_TRUE(view.covisibility.empty());
+    EXPECT_TRUE(view.spanning_tree.empty());
+    return 0;
+  }
+  EXPECT_EQ(view.covisibility.size() % 3, 0u);
+  std::multiset<std::tuple<uint32_t, uint32_t, uint32_t>> forward, backward;
+  for (size_t k = 0; k + 2 < view.covisibility.size(); k += 3) {
+    const uint32_t i = view.covisibility[k], j = view.covisibility[k + 1];
+    const uint32_t weight = view.covisibility[k + 2];
+    EXPECT_LT(i, n);
+    EXPECT_LT(j, n);
+    EXPECT_NE(i, j);
+    EXPECT_GE(weight, static_cast<uint32_t>(kViewCovisibilityMinWeight));
+    forward.insert({i, j, weight});
+    backward.insert({j, i, weight});
+  }
+  EXPECT_EQ(forward, backward) << "covisibility is not symmetric";
+  EXPECT_EQ(view.spanning_tree.size() % 2, 0u);
+  std::set<uint32_t> children;
+  for (size_t k = 0; k + 1 < view.spanning_tree.size(); k += 2) {
+    const uint32_t child = view.spanning_tree[k], parent = view.spanning_tree[k + 1];
+    EXPECT_LT(child, n);
+    EXPECT_LT(parent, n);
+    EXPECT_NE(child, parent);
+    EXPECT_TRUE(children.insert(child).second) << "keyframe " << child << " has two parents";
+  }
+  // A tree over the keyframes: every one but the first has its parent in the map.
+  if (n > 0) {
+    EXPECT_EQ(children.size(), n - 1);
+  }
+  EXPECT_EQ(children.count(0), 0u);
+  return forward.size() / 2;
+}
+
+TEST(SystemView, AgreesWithTheMapAndKeepsWhatTheMaskTookOnlyWhileWatched) {
+  const testing::TempDir dir;
+  synth::GeneratorOptions generator;
+  generator.preset = "w_xyz";
+  generator.seed = 3;
+  generator.out = dir.path();
+  generator.frames = kFrames;
+  generator.progress = false;
+  synth::GenerateSequence(generator);
+
+  const io::Sequence sequence = io::ReadDataset(dir.path());
+  SystemOptions options;
+  options.sensor = sequence.sensor;
+  options.settings = io::LoadOrbSlamSettings(dir.path() + "/settings.yaml", sequence.sensor);
+  options.deterministic = true;
+  // The extractor then gets the given masks as they are (nothing carried or grown), so that the
+  // keypoints it reports as taken away can be checked against them.
+  options.mask_propagation_frames = 0;
+  options.mask_completion_px = 0;
+  System system(options);
+  system.Watch(true);
+  size_t rejected_total = 0, most_covisibility = 0;
+  int frames_with_rejected = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    if (i == kWatchedUntil + 1) system.Watch(false);
+    const FrameInput input = LoadFrameInput(sequence.frames[i], options, "moving");
+    const FrameReport report = system.Track(input);
+    ASSERT_EQ(report.state, TrackingState::kOk) << "frame " << i;
+    ViewRequest request;
+    request.graph = i % 2 == 1;
+    SystemView view;
+    system.View(&view, request);
+    SCOPED_TRACE(::testing::Message() << "frame " << i);
+    ASSERT_EQ(view.points.size(), 3 * view.point_states.size());
+    EXPECT_EQ(CountPoints(view).in_map, static_cast<size_t>(report.map_points));
+    EXPECT_EQ(view.keyframes.size(), static_cast<size_t>(report.map_keyframes));
+    EXPECT_EQ(view.keypoints.size(), 2 * view.keypoint_kinds.size());
+    EXPECT_EQ(view.keypoint_kinds.size(), static_cast<size_t>(report.num_features));
+    EXPECT_EQ(view.has_graph, request.graph);
+    most_covisibility = std::max(most_covisibility, CheckEdges(view));
+    ASSERT_EQ(view.rejected_keypoints.size() % 2, 0u);
+    if (i > kWatchedUntil) {
+      EXPECT_TRUE(view.rejected_keypoints.empty()) << "kept while nobody watched";
+      continue;
+    }
+    for (size_t k = 0; k + 1 < view.rejected_keypoints.size(); k += 2) {
+      const int col = std::min(cvRound(view.rejected_keypoints[k]), input.mask.cols - 1);
+      const int row = std::min(cvRound(view.rejected_keypoints[k + 1]), input.mask.rows - 1);
+      ASSERT_NE(input.mask.at<uint8_t>(row, col), 0) << "a rejected keypoint off the mask";
+    }
+    rejected_total += view.rejected_keypoints.size() / 2;
+    frames_with_rejected += view.rejected_keypoints.empty() ? 0 : 1;
+  }
+  system.Finish();
+  SystemView view;
+  ViewRequest request;
+  request.graph = true;
+  system.View(&view, request);
+  const MapSummary summary = system.Summary();
+  EXPECT_EQ(view.keyframes.size(), static_cast<size_t>(summary.keyframes));
+  EXPECT_EQ(CountPoints(view).in_map, static_cast<size_t>(summary.map_points));
+  CheckEdges(view);
+  std::printf(
+      "w_xyz seed 3, %d frames: %d keyframes, %d map points; %zu keypoints taken by the mask in "
+      "%d of %d watched frames; up to %zu covisibility edges of >= %d points\n",
+      kFrames, summary.keyframes, summary.map_points, rejected_total, frames_with_rejected,
+      kWatchedUntil + 1, most_covisibility, kViewCovisibilityMinWeight);
+  // The walkers are in view for most of the sequence, and the keyframes share far more than 100
+  // points in a small room.
+  EXPECT_GT(frames_with_rejected, kWatchedUntil / 2);
+  EXPECT_GT(most_covisibility, 0u);
+  EXPECT_GT(summary.keyframes, 1);
+}
+
+}  // namespace
+}  // namespace moslam::slam
