@@ -125,10 +125,11 @@ class SystemTracker : public runner::Tracker {
   eval::Trajectory CameraTrajectory() const override { return system_.CameraTrajectory(); }
   eval::Trajectory KeyFrameTrajectory() const override { return system_.KeyFrameTrajectory(); }
   slam::MapSummary Summary() const override { return system_.Summary(); }
-  bool View(slam::SystemView* view) override {
-    system_.View(view);
+  bool View(slam::SystemView* view, const slam::ViewRequest& request) override {
+    system_.View(view, request);
     return true;
   }
+  void Watch(bool watched) override { system_.Watch(watched); }
 
  private:
   slam::System system_;

@@ -20,10 +20,14 @@ class Tracker {
   // A viewer's copy of the tracker's state after the last Track() (slam::System::View), asked
   // for from the tracking thread only while a viewer watches. false: this tracker has none
   // (fakes), and the viewer shows the numbers and the image only.
-  virtual bool View(slam::SystemView* view) {
+  virtual bool View(slam::SystemView* view, const slam::ViewRequest& request) {
     (void)view;
+    (void)request;
     return false;
   }
+  // Whether a viewer watches (slam::System::Watch): the tracker may then keep, while tracking,
+  // what only a viewer shows. Tracking thread, between Track calls.
+  virtual void Watch(bool watched) { (void)watched; }
 };
 
 // "not_initialized", "ok", "lost" (slam::ToString lives in the SLAM core, which runner does not

@@ -20,17 +20,33 @@ class FakeTracker : public runner::Tracker {
       view_.keypoints.insert(view_.keypoints.end(), {1.0f * (i % 640), 1.0f * (i % 480)});
       view_.keypoint_kinds.push_back(static_cast<uint8_t>(i % 4));
     }
+    // A tenth as many taken by the mask, and one closed loop between the first and the last
+    // keyframe.
+    for (size_t i = 0; i < keypoints / 10; ++i) {
+      view_.rejected_keypoints.insert(view_.rejected_keypoints.end(), {10.0f + i, 20.0f});
+    }
+    if (keyframes >= 2) view_.loops = {0, static_cast<uint32_t>(keyframes - 1)};
   }
   slam::FrameReport Track(const slam::FrameInput&) override { return {}; }
   void Finish() override {}
   eval::Trajectory CameraTrajectory() const override { return {}; }
   eval::Trajectory KeyFrameTrajectory() const override { return {}; }
   slam::MapSummary Summary() const override { return {}; }
-  bool View(slam::SystemView* view) override {
+  bool View(slam::SystemView* view, const slam::ViewRequest& request) override {
     ++views;
     *view = view_;
+    if (!watched) view->rejected_keypoints.clear();  // as System: only while watched
+    // A chain of keyframes with its neighbours, as a spanning tree and a covisibility graph.
+    if (request.graph) {
+      view->has_graph = true;
+      for (uint32_t i = 1; i < view_.keyframes.size(); ++i) {
+        view->spanning_tree.insert(view->spanning_tree.end(), {i, i - 1});
+        view->covisibility.insert(view->covisibility.end(), {i, i - 1, 150, i - 1, i, 150});
+      }
+    }
     return true;
   }
+  void Watch(bool on) override { watched = on; }
   // How many points View() reports as in the map (not erased).
   size_t MapPoints() const {
     size_t n = 0;
@@ -38,6 +54,7 @@ class FakeTracker : public runner::Tracker {
     return n;
   }
   std::atomic<int> views{0};
+  bool watched = false;  // the last Watch()
 
  private:
   slam::SystemView view_;

@@ -92,31 +92,63 @@ void LiveViewer::OnFrame(const runner::FrameRecord& record, const slam::FrameInp
   // Kept (shared, not copied) for the final picture, which shows the last frame.
   last_image_ = input.image;
   last_mask_ = input.mask;
+  last_depth_ = input.depth;
+  // The tracker keeps what only a viewer shows (the keypoints the mask took away) while a browser
+  // is connected, from the next frame on.
+  const bool watched = server_->clients() > 0;
+  if (watched != watching_) {
+    tracker.Watch(watched);
+    watching_ = watched;
+  }
   Snapshot snapshot;
   snapshot.numbers = Numbers(record);
-  snapshot.T_world_cam = record.report.T_world_cam;
+  last_numbers_ = snapshot.numbers;
+  snapshot.T_world_cam = last_T_world_cam_ = record.report.T_world_cam;
   if (snapshot.T_world_cam && !first_pose_)
     first_pose_.emplace(record.timestamp, *snapshot.T_world_cam);
   snapshot.first_pose = first_pose_;
   if (snapshot.T_world_cam) AppendPosition(*snapshot.T_world_cam, &pending_trajectory_);
   // A paused run shows the frame it stopped at, whatever the server has not sent yet, also to a
   // browser that connects later (the server keeps the last picture for it).
-  const bool pausing = paused();
-  if ((server_->clients() > 0 && slot_.Empty()) || pausing) {
-    slam::SystemView view;
-    if (tracker.View(&view)) snapshot.view = std::move(view);
-    snapshot.image = input.image;  // shared: the loop never writes a tracked frame's images
-    snapshot.mask = input.mask;
-    snapshot.new_trajectory = std::move(pending_trajectory_);
-    pending_trajectory_.clear();
+  if ((watched && slot_.Empty()) || paused()) {
+    Fill(input, tracker, &snapshot);
     Publish(std::move(snapshot), false);
   }
-  WaitWhilePaused();
+  WaitWhilePaused(input, tracker);
 }
 
-void LiveViewer::WaitWhilePaused() {
+void LiveViewer::Fill(const slam::FrameInput& input, runner::Tracker& tracker, Snapshot* snapshot) {
+  slam::ViewRequest request;
+  bool depth = false;
+  {
+    std::lock_guard<std::mutex> lock(control_mutex_);
+    request.graph = graph_;
+    depth = depth_;
+  }
+  slam::SystemView view;
+  if (tracker.View(&view, request)) snapshot->view = std::move(view);
+  snapshot->image = input.image;  // shared: the loop never writes a tracked frame's images
+  snapshot->mask = input.mask;
+  if (depth) snapshot->depth = input.depth;
+  snapshot->new_trajectory = std::move(pending_trajectory_);
+  pending_trajectory_.clear();
+}
+
+void LiveViewer::WaitWhilePaused(const slam::FrameInput& input, runner::Tracker& tracker) {
   std::unique_lock<std::mutex> lock(control_mutex_);
   while (paused_ && steps_ == 0 && !finished_ && !(stop_ != nullptr && stop_->load() != 0)) {
+    if (refresh_) {
+      refresh_ = false;
+      lock.unlock();
+      Snapshot snapshot;
+      snapshot.numbers = last_numbers_;
+      snapshot.T_world_cam = last_T_world_cam_;
+      snapshot.first_pose = first_pose_;
+      Fill(input, tracker, &snapshot);
+      Publish(std::move(snapshot), false);
+      lock.lock();
+      continue;
+    }
     control_changed_.wait_for(lock, kStopCheck);
   }
   if (steps_ > 0) --steps_;
@@ -142,8 +174,13 @@ void LiveViewer::Finish(const runner::RunResult& result, runner::Tracker& tracke
     snapshot.numbers["timestamp"] = last.timestamp;
     snapshot.numbers["state"] = runner::StateName(last.report.state);
   }
+  // The final picture carries the keyframe graph and the depth whatever the page asked, so that
+  // they can be turned on after the run; it is sent once.
+  slam::ViewRequest request;
+  request.graph = true;
   slam::SystemView view;
-  if (tracker.View(&view)) snapshot.view = std::move(view);
+  if (tracker.View(&view, request)) snapshot.view = std::move(view);
+  snapshot.depth = last_depth_;
   // The trajectory after the last corrections (loops), replacing the one drawn while running.
   for (const geometry::SE3& pose : result.camera.poses) {
     AppendPosition(pose, &snapshot.new_trajectory);
@@ -178,6 +215,9 @@ void LiveViewer::Encode() {
 
 void LiveViewer::OnCommand(const nlohmann::json& command) {
   const std::string cmd = command["cmd"].get<std::string>();
+  // "on" of the toggles; anything but true (missing, not a boolean) turns it off.
+  const auto on = command.find("on");
+  const bool turn_on = on != command.end() && on->is_boolean() && on->get<bool>();
   {
     std::lock_guard<std::mutex> lock(control_mutex_);
     if (cmd == "pause") {
@@ -187,6 +227,10 @@ void LiveViewer::OnCommand(const nlohmann::json& command) {
     } else if (cmd == "step") {
       paused_ = true;
       ++steps_;
+    } else if (cmd == "graph" || cmd == "depth") {
+      bool& toggle = cmd == "graph" ? graph_ : depth_;
+      refresh_ = refresh_ || toggle != turn_on;
+      toggle = turn_on;
     } else {
       spdlog::debug("viewer: unknown command '{}' ignored", cmd);
       return;
@@ -198,6 +242,11 @@ void LiveViewer::OnCommand(const nlohmann::json& command) {
 
 void LiveViewer::BroadcastStatus() {
   nlohmann::json status = {{"type", "status"}, {"paused", paused()}};
+  {
+    std::lock_guard<std::mutex> lock(control_mutex_);
+    status["graph"] = graph_;
+    status["depth"] = depth_;
+  }
   server_->Broadcast(std::make_shared<const std::string>(status.dump()), /*binary=*/false);
 }
 

@@ -9,6 +9,11 @@
 // server thread takes it, encodes it (JPEG/PNG, arrays) and sends it; a browser that reads slowly
 // is skipped (ServerOptions::max_buffered_bytes). Tracking never waits for the server or for a
 // browser; it waits only while the page has paused the run.
+//
+// What the page shows on demand is asked for with commands and applies to every browser: "graph"
+// (covisibility and spanning-tree edges, slam::ViewRequest) and "depth" (the depth image), each
+// {"cmd": ..., "on": true|false}. The tracker is told whether anyone watches
+// (runner::Tracker::Watch: the keypoints the mask took away are kept only then).
 #pragma once
 
 #include <atomic>
@@ -59,11 +64,15 @@ class LiveViewer : public runner::FrameObserver {
 
  private:
   nlohmann::json Numbers(const runner::FrameRecord& record);
+  // The map's copy (as the page asks for it) and the frame's images into *snapshot.
+  void Fill(const slam::FrameInput& input, runner::Tracker& tracker, Snapshot* snapshot);
   void Publish(Snapshot snapshot, bool replace);
   void Encode();                                  // server thread
   void OnCommand(const nlohmann::json& command);  // server thread
   void BroadcastStatus();                         // server thread
-  void WaitWhilePaused();                         // tracking thread
+  // Tracking thread: blocks while paused; a toggle meanwhile publishes the frame again with
+  // what the page now asks for.
+  void WaitWhilePaused(const slam::FrameInput& input, runner::Tracker& tracker);
 
   const std::atomic<int>* stop_;
   LatestSlot<Snapshot> slot_;
@@ -72,8 +81,11 @@ class LiveViewer : public runner::FrameObserver {
   size_t frames_ = 0;
   double fps_ = 0.0;
   std::chrono::steady_clock::time_point last_frame_time_;
-  cv::Mat last_image_, last_mask_;
+  cv::Mat last_image_, last_mask_, last_depth_;
+  nlohmann::json last_numbers_;  // of the last frame, to publish it again
+  std::optional<geometry::SE3> last_T_world_cam_;
   std::optional<std::pair<double, geometry::SE3>> first_pose_;  // of the first tracked frame
+  bool watching_ = false;  // what the tracker was last told (Tracker::Watch)
   // Server thread only.
   RunPicture picture_;
   eval::Trajectory ground_truth_;
@@ -83,6 +95,11 @@ class LiveViewer : public runner::FrameObserver {
   bool paused_ = false;
   int steps_ = 0;
   bool finished_ = false;
+  // What the page asks for beyond the default picture (commands "graph", "depth"), and whether a
+  // paused frame should be published again because that changed.
+  bool graph_ = false;
+  bool depth_ = false;
+  bool refresh_ = false;
   std::unique_ptr<Server> server_;  // last: stopped first, before what its thread uses
 };
 

@@ -2,9 +2,12 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
+#include <optional>
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include "moslam/viewer/fake_tracker.h"
 #include "moslam/viewer/test_client.h"
@@ -46,6 +49,15 @@ slam::FrameInput Input() {
   return input;
 }
 
+// Input() with a depth image: 1 m to 3 m from left to right, a hole in the middle.
+slam::FrameInput InputWithDepth() {
+  slam::FrameInput input = Input();
+  input.depth = cv::Mat(input.image.size(), CV_32FC1);
+  for (int c = 0; c < input.depth.cols; ++c) input.depth.col(c).setTo(1.0f + 2.0f * c / 64);
+  input.depth(cv::Rect(30, 20, 4, 4)).setTo(0.0f);
+  return input;
+}
+
 // Whether a binary message is a frame message for frame `index`.
 auto IsFrame(int index) {
   return [index](const WsClient::Message& m) {
@@ -61,6 +73,7 @@ TEST(LiveViewer, WithoutABrowserTheMapIsNeverCopied) {
   const slam::FrameInput input = Input();
   for (int i = 0; i < 20; ++i) viewer.OnFrame(Record(i), input, tracker);
   EXPECT_EQ(tracker.views.load(), 0);
+  EXPECT_FALSE(tracker.watched);  // nor anything kept for a viewer while tracking
 }
 
 TEST(LiveViewer, SendsTheMapImageAndNumbers) {
@@ -91,6 +104,16 @@ TEST(LiveViewer, SendsTheMapImageAndNumbers) {
   EXPECT_EQ(message->Section("points")->size(), 100 * 3 * sizeof(float));
   EXPECT_EQ(message->Section("keyframes")->size(), 3 * 12 * sizeof(float));
   EXPECT_EQ(message->Section("keypoint_kinds")->size(), 50u);
+  // A connected browser has the tracker keep what the mask took away; the closed loops are
+  // always sent, the keyframe graph and the depth only when asked (next test).
+  EXPECT_TRUE(tracker.watched);
+  ASSERT_NE(message->Section("rejected_keypoints"), nullptr);
+  EXPECT_EQ(message->Section("rejected_keypoints")->size(), 5 * 2 * sizeof(float));
+  ASSERT_NE(message->Section("loops"), nullptr);
+  EXPECT_EQ(message->Section("loops")->size(), 2 * sizeof(uint32_t));
+  EXPECT_EQ(message->Section("covisibility"), nullptr);
+  EXPECT_EQ(message->Section("spanning_tree"), nullptr);
+  EXPECT_EQ(message->Section("depth"), nullptr);
   ASSERT_NE(message->Section("image"), nullptr);
   ASSERT_NE(message->Section("mask"), nullptr);
   EXPECT_EQ(message->Section("trajectory")->size(), static_cast<size_t>(index) * 3 * sizeof(float));
@@ -105,6 +128,79 @@ TEST(LiveViewer, SendsTheMapImageAndNumbers) {
     const auto decoded = m.binary ? DecodeMessage(m.payload) : std::nullopt;
     return decoded && decoded->header.value("finished", false);
   }));
+}
+
+// Frames are fed until the client has a frame message that `match` accepts; returns it.
+std::optional<DecodedMessage> FeedUntil(LiveViewer& viewer, testing::FakeTracker& tracker,
+                                        const slam::FrameInput& input, WsClient& client, int* index,
+                                        const std::function<bool(const DecodedMessage&)>& match) {
+  const auto accepts = [&](const WsClient::Message& m) {
+    const auto decoded = m.binary ? DecodeMessage(m.payload) : std::nullopt;
+    return decoded && decoded->header.value("frame", -1) >= 0 && match(*decoded);
+  };
+  for (int tries = 0; tries < 200; ++tries) {
+    viewer.OnFrame(Record((*index)++), input, tracker);
+    if (client.WaitForMessage(accepts, std::chrono::milliseconds(50))) break;
+  }
+  for (const auto& m : client.messages()) {
+    if (accepts(m)) return DecodeMessage(m.payload);
+  }
+  return std::nullopt;
+}
+
+TEST(LiveViewer, TheKeyframeGraphAndTheDepthAreSentOnlyWhileThePageAsks) {
+  LiveViewer viewer(AnyPort(), nullptr);
+  testing::FakeTracker tracker(100, 4, 50);
+  WsClient client(WsUrl(viewer));
+  ASSERT_TRUE(client.WaitOpen());
+  ASSERT_TRUE(client.WaitMessages(1));
+  const slam::FrameInput input = InputWithDepth();
+  int index = 0;
+  const auto plain = FeedUntil(viewer, tracker, input, client, &index,
+                               [](const DecodedMessage& m) { return m.Section("points"); });
+  ASSERT_TRUE(plain.has_value());
+  EXPECT_EQ(plain->Section("covisibility"), nullptr);
+  EXPECT_EQ(plain->Section("spanning_tree"), nullptr);
+  EXPECT_EQ(plain->Section("depth"), nullptr);
+  EXPECT_FALSE(plain->header.contains("depth_far_m"));
+
+  client.Send(R"({"cmd": "graph", "on": true})");
+  client.Send(R"({"cmd": "depth", "on": true})");
+  // Every browser hears of the toggles (the page sets its checkboxes from them).
+  ASSERT_TRUE(client.WaitForMessage([](const WsClient::Message& m) {
+    const auto j = nlohmann::json::parse(m.payload, nullptr, false);
+    return !m.binary && j.is_object() && j.value("graph", false) && j.value("depth", false);
+  }));
+  const auto full = FeedUntil(viewer, tracker, input, client, &index, [](const DecodedMessage& m) {
+    return m.Section("covisibility") && m.Section("depth");
+  });
+  ASSERT_TRUE(full.has_value());
+  // The fake's chain of 4 keyframes: 3 covisibility edges (once each, i < j, with their weight)
+  // and 3 parents.
+  EXPECT_EQ(full->Section("covisibility")->size(), 3 * 3 * sizeof(uint32_t));
+  EXPECT_EQ(full->Section("spanning_tree")->size(), 3 * 2 * sizeof(uint32_t));
+  // The depth as a picture (no wider than half the image width the page shows, 640 / 2 px: this
+  // one is not shrunk), its range in the header.
+  const std::string& jpeg = *full->Section("depth");
+  const cv::Mat depth =
+      cv::imdecode(std::vector<uint8_t>(jpeg.begin(), jpeg.end()), cv::IMREAD_COLOR);
+  ASSERT_FALSE(depth.empty());
+  EXPECT_EQ(depth.cols, 64);
+  EXPECT_GT(full->header.value("depth_far_m", 0.0), 2.5);
+  EXPECT_LE(full->header.value("depth_far_m", 0.0), 3.0);
+
+  // Off again (a malformed "on" counts as off): the messages shrink back.
+  client.Send(R"({"cmd": "graph", "on": "yes"})");
+  client.Send(R"({"cmd": "depth", "on": false})");
+  ASSERT_TRUE(client.WaitForMessage([](const WsClient::Message& m) {
+    const auto j = nlohmann::json::parse(m.payload, nullptr, false);
+    return !m.binary && j.is_object() && j.contains("graph") && !j.value("graph", true) &&
+           !j.value("depth", true);
+  }));
+  const auto again = FeedUntil(viewer, tracker, input, client, &index, [](const DecodedMessage& m) {
+    return m.Section("points") && !m.Section("covisibility") && !m.Section("depth");
+  });
+  EXPECT_TRUE(again.has_value());
 }
 
 TEST(LiveViewer, PauseStepAndResumeHoldTheRunLoop) {
@@ -130,6 +226,14 @@ TEST(LiveViewer, PauseStepAndResumeHoldTheRunLoop) {
   EXPECT_FALSE(client.WaitForMessage(IsFrame(2), std::chrono::milliseconds(300)));
   EXPECT_EQ(done.load(), 1);
   EXPECT_TRUE(viewer.paused());
+  // Turned on while paused, the keyframe graph comes with the same frame, sent again; the loop
+  // stays where it is.
+  client.Send(R"({"cmd": "graph", "on": true})");
+  ASSERT_TRUE(client.WaitForMessage([](const WsClient::Message& m) {
+    const auto decoded = m.binary ? DecodeMessage(m.payload) : std::nullopt;
+    return decoded && decoded->header.value("frame", -1) == 1 && decoded->Section("spanning_tree");
+  }));
+  EXPECT_EQ(done.load(), 1);
   client.Send("{\"cmd\": \"resume\"}");
   loop.join();
   EXPECT_EQ(done.load(), 10);

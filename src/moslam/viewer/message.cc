@@ -1,10 +1,13 @@
 #include "moslam/viewer/message.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "moslam/util/check.h"
 
 namespace moslam::viewer {
 namespace {
@@ -49,7 +52,43 @@ std::string Encoded(const std::string& ext, const cv::Mat& image) {
   return Bytes(buffer);
 }
 
+// Covisibility edges (i, j, weight, both directions) once each: i < j, as the page draws them.
+std::vector<uint32_t> OneWay(const std::vector<uint32_t>& edges) {
+  std::vector<uint32_t> out;
+  out.reserve(edges.size() / 2 + 3);
+  for (size_t k = 0; k + 2 < edges.size(); k += 3) {
+    if (edges[k] < edges[k + 1]) out.insert(out.end(), {edges[k], edges[k + 1], edges[k + 2]});
+  }
+  return out;
+}
+
 }  // namespace
+
+cv::Mat ColourDepth(const cv::Mat& depth, float* far_m) {
+  MOSLAM_CHECK(depth.type() == CV_32FC1);
+  const cv::Mat valid = depth > 0;
+  if (*far_m <= 0.0f) {
+    std::vector<float> values;
+    values.reserve(depth.total());
+    for (int r = 0; r < depth.rows; ++r) {
+      const float* row = depth.ptr<float>(r);
+      for (int c = 0; c < depth.cols; ++c) {
+        if (row[c] > 0 && std::isfinite(row[c])) values.push_back(row[c]);
+      }
+    }
+    if (!values.empty()) {
+      const auto at = values.begin() + static_cast<std::ptrdiff_t>(0.98 * (values.size() - 1));
+      std::nth_element(values.begin(), at, values.end());
+      *far_m = *at;
+    }
+    if (*far_m <= 0.0f) *far_m = 1.0f;
+  }
+  cv::Mat grey, colour;
+  depth.convertTo(grey, CV_8U, 255.0 / *far_m);  // saturates beyond far_m
+  cv::applyColorMap(grey, colour, cv::COLORMAP_TURBO);
+  colour.setTo(cv::Scalar::all(0), ~valid);
+  return colour;
+}
 
 std::string EncodeSnapshot(const Snapshot& snapshot, const RunPicture& picture,
                            int max_image_width) {
@@ -62,6 +101,13 @@ std::string EncodeSnapshot(const Snapshot& snapshot, const RunPicture& picture,
     sections.emplace_back("keyframes", Bytes(KeyframePoses(v.keyframes)));
     sections.emplace_back("keypoints", Bytes(v.keypoints));
     sections.emplace_back("keypoint_kinds", Bytes(v.keypoint_kinds));
+    if (!v.rejected_keypoints.empty())
+      sections.emplace_back("rejected_keypoints", Bytes(v.rejected_keypoints));
+    if (!v.loops.empty()) sections.emplace_back("loops", Bytes(v.loops));
+    if (v.has_graph) {
+      sections.emplace_back("covisibility", Bytes(OneWay(v.covisibility)));
+      sections.emplace_back("spanning_tree", Bytes(v.spanning_tree));
+    }
   }
   sections.emplace_back("trajectory", Bytes(picture.trajectory));
   sections.emplace_back("ground_truth", Bytes(picture.ground_truth));
@@ -80,6 +126,16 @@ std::string EncodeSnapshot(const Snapshot& snapshot, const RunPicture& picture,
       cv::threshold(mask, mask, 0, 255, cv::THRESH_BINARY);
       sections.emplace_back("mask", Encoded(".png", mask));
     }
+  }
+  if (!snapshot.depth.empty()) {
+    cv::Mat depth = snapshot.depth;
+    // Nearest, not area: averaging a valid depth with a missing one (0) would invent depths.
+    while (depth.cols > max_image_width / 2 && depth.cols >= 2) {
+      cv::resize(depth, depth, cv::Size(depth.cols / 2, depth.rows / 2), 0, 0, cv::INTER_NEAREST);
+    }
+    float far_m = 0.0f;
+    sections.emplace_back("depth", Encoded(".jpg", ColourDepth(depth, &far_m)));
+    header["depth_far_m"] = far_m;
   }
   nlohmann::json list = nlohmann::json::array();
   for (const auto& [name, bytes] : sections)

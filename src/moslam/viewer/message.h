@@ -1,9 +1,11 @@
 // What the viewer page is sent (web/viewer.js reads it): one binary WebSocket message per update,
 //   "MSV1", u32 n, n bytes of JSON (the numbers and the list of sections), padding to 4 bytes,
 //   then each section of the list in order, each padded to 4 bytes;
-// sections: float32 or uint8 arrays (points, states, keyframe poses, keypoints, trajectories) and
-// the current image (JPEG) and movable mask (PNG). Little-endian, as every browser's typed
-// arrays on the machines this runs on.
+// sections: float32, uint32 or uint8 arrays (points, states, keyframe poses, keypoints, keypoints
+// the mask took away, keyframe edges, trajectories), the current image (JPEG), its movable mask
+// (PNG) and, when the page asks, its depth (colour-mapped JPEG). A section the snapshot has no
+// data for is left out: the keyframe graph and the depth cost nothing until asked for.
+// Little-endian, as every browser's typed arrays on the machines this runs on.
 #pragma once
 
 #include <cstdint>
@@ -28,6 +30,7 @@ struct Snapshot {
   std::optional<slam::SystemView> view;  // nullopt: the tracker has none (runner::Tracker::View)
   cv::Mat image;                         // the frame as tracked (grey or colour); empty: none
   cv::Mat mask;                          // CV_8UC1 movable mask; empty: none
+  cv::Mat depth;  // CV_32FC1 metres (0: none), only while the page shows depth; empty: none
   // Camera positions (x, y, z per frame with a pose) since the previous snapshot, and the current
   // pose (none while lost).
   std::vector<float> new_trajectory;
@@ -43,9 +46,15 @@ struct RunPicture {
 };
 
 // Encodes `snapshot` with the whole trajectory so far; images wider than `max_image_width` are
-// halved until they fit (the page shows them in a corner).
+// halved until they fit (the page shows them in a corner), the depth until it is at most half
+// that wide.
 std::string EncodeSnapshot(const Snapshot& snapshot, const RunPicture& picture,
                            int max_image_width = 640);
+
+// A depth map (CV_32FC1 metres, 0 = none) as a colour picture (CV_8UC3): near blue to far red
+// (OpenCV's turbo map) from 0 to `far_m`, pixels without depth black. `far_m` <= 0: the 98th
+// percentile of the valid depths, so that a few far pixels do not wash the picture out.
+cv::Mat ColourDepth(const cv::Mat& depth, float* far_m);
 
 // The ground truth's positions (x, y, z) from time `t0` up to time `until`, moved so that its pose
 // nearest in time to `t0` lies on the estimate's pose then, `T_world_cam0`: the two start together

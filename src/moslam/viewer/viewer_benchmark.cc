@@ -65,7 +65,7 @@ void BM_EncodeSnapshot(benchmark::State& state) {
   testing::FakeTracker tracker(static_cast<size_t>(state.range(0)), 100, 1500);
   Snapshot snapshot;
   slam::SystemView view;
-  tracker.View(&view);
+  tracker.View(&view, slam::ViewRequest());
   snapshot.view = view;
   const slam::FrameInput input = Input();
   snapshot.image = input.image;
