@@ -5,13 +5,16 @@
 //
 // Environment: MOSLAM_VIEWER_DATASET=DIR runs an existing TUM-layout folder (with settings.yaml)
 // instead of a generated one; MOSLAM_VIEWER_SCREENSHOT=FILE.png saves the page while paused
-// mid-run (docs/ screenshots).
+// mid-run, with the keyframe graph and the depth on (docs/ screenshots); MOSLAM_VIEWER_PAUSE_AT=N
+// pauses there at frame N or later instead of frame 3; MOSLAM_VIEWER_VOCABULARY=FILE runs with
+// that vocabulary (loop closing) instead of none.
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -164,6 +167,38 @@ class Page {
   int id_ = 0;
 };
 
+// What the page gets only on demand, on a run paused at `frame`: no keyframe graph or depth
+// before the page asks; turned on from the page's checkboxes, they arrive with the paused frame
+// (sent again), the spanning tree linking every keyframe. The keypoints the mask took away come
+// without asking, once a browser watches.
+void CheckOnDemand(Page& page, int frame) {
+  json s = page.State();
+  EXPECT_EQ(s.value("graphMessages", -1), 0) << s.dump();
+  EXPECT_EQ(s.value("covisibilityEdges", -1), 0);
+  EXPECT_EQ(s.value("spanningEdges", -1), 0);
+  EXPECT_EQ(s.value("depthMessages", -1), 0);
+  EXPECT_GT(s.value("rejectedMax", 0), 0) << "no keypoint taken by the mask drawn";
+  page.Click("graph");
+  page.Click("depth");
+  ASSERT_TRUE(Eventually(
+      [&] {
+        s = page.State();
+        return s.value("graphMessages", 0) > 0 && s.value("depthWidth", 0) > 0;
+      },
+      30))
+      << s.dump();
+  EXPECT_TRUE(s.value("graphOn", false));
+  EXPECT_TRUE(s.value("depthOn", false));
+  EXPECT_EQ(s.value("frame", -1), frame) << "the toggles moved the run";
+  EXPECT_EQ(s.value("spanningEdges", -1), s.value("keyframes", 0) - 1);
+  EXPECT_GT(s.value("covisibilityEdges", 0), 0);
+  std::printf(
+      "paused at frame %d: %d keyframes, %d covisibility edges, %d keypoints taken by the "
+      "mask (most in a frame so far: %d), %d loops\n",
+      frame, s.value("keyframes", 0), s.value("covisibilityEdges", 0),
+      s.value("rejectedKeypoints", 0), s.value("rejectedMax", 0), s.value("loops", 0));
+}
+
 TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
   std::string chromium = FindOnPath("chromium");
   if (chromium.empty()) chromium = FindOnPath("chromium-browser");
@@ -184,10 +219,12 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
   }
   const int port = FreePort();
   const std::string run_dir = dir.path() + "/run";
-  Child run({moslam, "run", "--dataset", "tum", data, "--settings", data + "/settings.yaml",
-             "--mask-source", "synth-gt", "--movable", "person", "--out", run_dir, "--vocabulary",
-             "none", "--realtime", "--viewer", std::to_string(port), "--viewer-paused"},
-            dir.path() + "/run.log");
+  Child run(
+      {moslam, "run", "--dataset", "tum", data, "--settings", data + "/settings.yaml",
+       "--mask-source", "synth-gt", "--movable", "person", "--out", run_dir, "--vocabulary",
+       std::getenv("MOSLAM_VIEWER_VOCABULARY") ? std::getenv("MOSLAM_VIEWER_VOCABULARY") : "none",
+       "--realtime", "--viewer", std::to_string(port), "--viewer-paused"},
+      dir.path() + "/run.log");
   ASSERT_TRUE(run.started());
   ASSERT_TRUE(Eventually([&] { return testing::HttpGet(port, "/").status == 200; }, 60))
       << ReadFile(dir.path() + "/run.log");
@@ -233,7 +270,9 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
 
   // Running, then paused from the page in the middle of the run: the counter stops.
   page.Click("resume");
-  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) >= 3; }, 60));
+  const int pause_at =
+      std::getenv("MOSLAM_VIEWER_PAUSE_AT") ? std::atoi(std::getenv("MOSLAM_VIEWER_PAUSE_AT")) : 3;
+  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) >= pause_at; }, 300));
   page.Click("pause");
   ASSERT_TRUE(Eventually([&] { return page.State().value("paused", false); }, 10));
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
@@ -241,7 +280,9 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
   ASSERT_FALSE(page.State().value("finished", true)) << "the run ended before the pause took";
   std::this_thread::sleep_for(std::chrono::seconds(1));
   EXPECT_EQ(page.State().value("frame", -1), stopped_at) << "the run went on while paused";
+  CheckOnDemand(page, stopped_at);
   if (const char* shot = std::getenv("MOSLAM_VIEWER_SCREENSHOT")) {
+    std::this_thread::sleep_for(std::chrono::seconds(1));  // the page draws the images async
     const json reply = page.Call("Page.captureScreenshot", {{"format", "png"}});
     std::ofstream(shot, std::ios::binary)
         << Base64Decode(reply["result"].value("data", std::string()));
@@ -265,6 +306,11 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
   EXPECT_GT(state.value("mapPoints", 0), 100);
   EXPECT_GT(state.value("groundTruth", 0), 0);
   EXPECT_EQ(state.value("error", std::string("?")), "") << state.dump();
+  // The final picture: the whole keyframe graph, which the page still shows.
+  EXPECT_EQ(state.value("spanningEdges", -1), state.value("keyframes", 0) - 1);
+  EXPECT_EQ(state.value("loops", -1), summary.value("loops_closed", -2));
+  // Each closed loop was announced on the page as it happened.
+  EXPECT_EQ(state.value("loopNotices", -1), state.value("loops", -2));
   // The run has ended and the page stays until Ctrl-C, which ends moslam with status 0.
   run.Signal(SIGINT);
   EXPECT_EQ(run.Wait(), 0) << ReadFile(dir.path() + "/run.log");

@@ -1,6 +1,7 @@
 // The moslam viewer page: reads the server's messages (message.h describes their layout), draws
 // the map with three.js (Debian's libjs-three, served by moslam), and sends pause / step /
-// resume. Its state is kept in window.moslam, which the browser test (browser_test.cc) reads.
+// resume and the toggles of what is sent only on demand (the keyframe graph, the depth image).
+// Its state is kept in window.moslam, which the browser test (browser_test.cc) reads.
 'use strict';
 
 const POINT_COLOURS = [  // slam::ViewPointState
@@ -9,18 +10,28 @@ const POINT_COLOURS = [  // slam::ViewPointState
 const KEYPOINT_COLOURS = [  // slam::ViewKeypointKind
   ['untracked', '#ffd24d'], ['tracked', '#33dd55'], ['near the mask', '#ff3344'],
   ['seen moving', '#33e0ff']];
+const REJECTED_COLOUR = '#ff66ff';  // keypoints the movable mask took away (drawn as crosses)
+const GRAPH_COLOURS = {covisibility: 0x2e8b57, spanning_tree: 0xdddddd, loop: 0xff33ff};
 const ERASED_FIRST = 4;
+const NOTICE_MS = 6000;  // how long a closed loop's notice stays
 
 const state = window.moslam = {
   connected: false, messages: 0, paused: false, finished: false, replay: false,
   frame: -1, frames: 0, keyframes: 0, mapPoints: 0, erasedPoints: 0, keypoints: 0,
   trajectory: 0, groundTruth: 0, webgl: true, numbers: {}, error: '',
+  // Sent on demand: what the last message held, and how many messages held it.
+  graphOn: false, covisibilityEdges: 0, spanningEdges: 0, graphMessages: 0,
+  depthOn: false, depthMessages: 0, depthWidth: 0,
+  // Always sent: keypoints the mask took away (the last frame's, the most seen) and closed loops.
+  rejectedKeypoints: 0, rejectedMax: 0, loops: 0, loopNotices: 0, notice: '', viewMessages: 0,
 };
 
 let socket = null;
 let lastMessage = null;  // kept out of window.moslam, which stays small to read
-function send(cmd) {
-  if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify({cmd: cmd}));
+function send(cmd, extra) {
+  if (socket && socket.readyState === WebSocket.OPEN) {
+    socket.send(JSON.stringify(Object.assign({cmd: cmd}, extra || {})));
+  }
 }
 window.moslamCommand = send;
 
@@ -107,7 +118,10 @@ function drawScene(m, s) {
     replace('points', new THREE.Points(geometry, new THREE.PointsMaterial(
         {size: 3, sizeAttenuation: false, vertexColors: THREE.VertexColors})));
   }
-  if (s.keyframes) replace('keyframes', lineObject(frustums(s.keyframes, 0.08, aspect), 0x4477ff, true));
+  if (s.keyframes) {
+    replace('keyframes', lineObject(frustums(s.keyframes, 0.08, aspect), 0x4477ff, true));
+    drawGraph(s, aspect);
+  }
   if (s.trajectory && s.trajectory.length >= 6) replace('trajectory', lineObject(s.trajectory.slice(), 0x33dd55));
   const gt = s.ground_truth && s.ground_truth.length >= 6 && document.getElementById('gt').checked;
   replace('gt', gt ? lineObject(s.ground_truth.slice(), 0xff9933) : null);
@@ -115,6 +129,34 @@ function drawScene(m, s) {
     replace('camera', lineObject(frustums(s.camera, 0.15, aspect), 0xff2222, true));
     if (document.getElementById('follow').checked) follow(s.camera);
   }
+}
+
+// Line segments between keyframe centres; `pairs` is a Uint32Array of `stride` numbers per edge,
+// the two keyframe indices first.
+function edgeLines(poses, pairs, stride, colour) {
+  const n = Math.floor(pairs.length / stride), out = new Float32Array(n * 6);
+  for (let e = 0; e < n; ++e) {
+    for (let end = 0; end < 2; ++end) {
+      const k = pairs[e * stride + end] * 12;
+      out.set(poses.subarray(k + 9, k + 12), e * 6 + end * 3);
+    }
+  }
+  return lineObject(out, colour, true);
+}
+
+// The keyframe graph when the page shows it, and the closed loops always: their edge and their
+// two keyframes in the loop colour.
+function drawGraph(s, aspect) {
+  const show = document.getElementById('graph').checked;
+  replace('covisibility', show && s.covisibility && s.covisibility.length ?
+      edgeLines(s.keyframes, s.covisibility, 3, GRAPH_COLOURS.covisibility) : null);
+  replace('spanning_tree', show && s.spanning_tree && s.spanning_tree.length ?
+      edgeLines(s.keyframes, s.spanning_tree, 2, GRAPH_COLOURS.spanning_tree) : null);
+  if (!s.loops || !s.loops.length) { replace('loops', null); replace('loop_keyframes', null); return; }
+  replace('loops', edgeLines(s.keyframes, s.loops, 2, GRAPH_COLOURS.loop));
+  const poses = new Float32Array(s.loops.length * 12);
+  s.loops.forEach((k, j) => poses.set(s.keyframes.subarray(k * 12, k * 12 + 12), j * 12));
+  replace('loop_keyframes', lineObject(frustums(poses, 0.12, aspect), GRAPH_COLOURS.loop, true));
 }
 
 // Keeps the orbit's offset and moves its target onto the current camera.
@@ -165,13 +207,37 @@ async function drawImage(m, s, buffer) {
     g.drawImage(tmp, 0, 0);
     state.maskPixels = covered;
   }
+  const scale = m.header.image_scale || 1;
   if (s.keypoints) {
-    const scale = m.header.image_scale || 1;
     for (let i = 0; i < s.keypoint_kinds.length; ++i) {
       g.strokeStyle = KEYPOINT_COLOURS[s.keypoint_kinds[i]][1];
       g.strokeRect(s.keypoints[2 * i] * scale - 2, s.keypoints[2 * i + 1] * scale - 2, 4, 4);
     }
   }
+  if (s.rejected_keypoints) {
+    g.strokeStyle = REJECTED_COLOUR;
+    g.beginPath();
+    for (let i = 0; i + 1 < s.rejected_keypoints.length; i += 2) {
+      const x = s.rejected_keypoints[i] * scale, y = s.rejected_keypoints[i + 1] * scale;
+      g.moveTo(x - 3, y - 3); g.lineTo(x + 3, y + 3);
+      g.moveTo(x - 3, y + 3); g.lineTo(x + 3, y - 3);
+    }
+    g.stroke();
+  }
+}
+
+// The depth image (a colour-mapped JPEG the server made), under the image while the page asks.
+const depthCanvas = document.getElementById('depthimage');
+async function drawDepth(m, s) {
+  const box = document.getElementById('depthbox');
+  if (!s.depth || !document.getElementById('depth').checked) { box.style.display = 'none'; return; }
+  const image = await createImageBitmap(new Blob([s.depth], {type: 'image/jpeg'}));
+  depthCanvas.width = image.width; depthCanvas.height = image.height;
+  depthCanvas.getContext('2d').drawImage(image, 0, 0);
+  box.style.display = 'block';
+  document.getElementById('depthscale').textContent =
+      'depth: blue 0 m ... red ' + fmt(m.header.depth_far_m, 2) + ' m, black: none';
+  state.depthWidth = image.width;
 }
 
 // --- numbers -----------------------------------------------------------------------------------
@@ -186,6 +252,7 @@ function drawNumbers(h) {
     ['keyframes', h.keyframes], ['map points', h.map_points],
     ['features / inliers', (h.features === undefined ? '-' : h.features) + ' / ' + (h.inliers === undefined ? '-' : h.inliers)],
     ['mask coverage', h.mask_coverage === undefined ? '-' : (100 * h.mask_coverage).toFixed(1) + ' %'],
+    ['keypoints taken by the mask', state.rejectedKeypoints], ['loops closed', state.loops],
     ['paused', state.paused ? 'yes' : 'no']];
   document.getElementById('numbers').innerHTML =
       rows.map(r => '<tr><td>' + r[0] + '</td><td>' + r[1] + '</td></tr>').join('');
@@ -197,8 +264,11 @@ function drawLegend() {
   document.getElementById('legend').innerHTML =
       POINT_COLOURS.map(p => sw(hex(p[1])) + p[0]).join('<br>') + '<br>' +
       sw('#4477ff') + 'keyframes ' + sw('#ff2222') + 'camera<br>' + sw('#33dd55') +
-      'trajectory ' + sw('#ff9933') + 'ground truth<br>keypoints: ' +
-      KEYPOINT_COLOURS.map(k => sw(k[1]) + k[0]).join(' ');
+      'trajectory ' + sw('#ff9933') + 'ground truth<br>' +
+      sw(hex(GRAPH_COLOURS.covisibility)) + 'covisibility ' + sw(hex(GRAPH_COLOURS.spanning_tree)) +
+      'spanning tree ' + sw(hex(GRAPH_COLOURS.loop)) + 'loop<br>keypoints: ' +
+      KEYPOINT_COLOURS.map(k => sw(k[1]) + k[0]).join(' ') + ' ' + sw(REJECTED_COLOUR) +
+      'taken by the mask';
 }
 
 // --- messages ----------------------------------------------------------------------------------
@@ -212,7 +282,9 @@ function decode(buffer) {
   let at = (8 + n + 3) & ~3;
   const types = {points: Float32Array, keyframes: Float32Array, keypoints: Float32Array,
                  trajectory: Float32Array, ground_truth: Float32Array, camera: Float32Array,
-                 point_states: Uint8Array, keypoint_kinds: Uint8Array};
+                 rejected_keypoints: Float32Array, point_states: Uint8Array,
+                 keypoint_kinds: Uint8Array, loops: Uint32Array, covisibility: Uint32Array,
+                 spanning_tree: Uint32Array};
   for (const s of header.sections) {
     const Type = types[s.name] || Uint8Array;
     sections[s.name] = new Type(buffer, at, s.bytes / Type.BYTES_PER_ELEMENT);
@@ -237,12 +309,44 @@ function onFrame(buffer) {
     state.mapPoints = s.point_states.length - erased;
   }
   if (s.keypoint_kinds) state.keypoints = s.keypoint_kinds.length;
+  if (s.keyframes) countOnDemand(h, s);
   state.trajectory = s.trajectory ? s.trajectory.length / 3 : 0;
   state.groundTruth = s.ground_truth ? s.ground_truth.length / 3 : 0;
   drawNumbers(h);
   drawScene(m, s);
   drawImage(m, s, buffer).catch(e => { state.error = 'image: ' + e; });
+  drawDepth(m, s).catch(e => { state.error = 'depth: ' + e; });
   lastMessage = m;
+}
+
+// What the message held beyond the default, and a notice for each newly closed loop.
+function countOnDemand(h, s) {
+  state.rejectedKeypoints = s.rejected_keypoints ? s.rejected_keypoints.length / 2 : 0;
+  state.rejectedMax = Math.max(state.rejectedMax, state.rejectedKeypoints);
+  const hasGraph = !!(s.covisibility && s.spanning_tree);
+  state.covisibilityEdges = hasGraph ? s.covisibility.length / 3 : 0;
+  state.spanningEdges = hasGraph ? s.spanning_tree.length / 2 : 0;
+  if (hasGraph) state.graphMessages += 1;
+  if (s.depth) state.depthMessages += 1;
+  const loops = s.loops ? s.loops.length / 2 : 0;
+  // A page that connects after a loop learns of it without a notice.
+  if (loops > state.loops && state.viewMessages > 0) {
+    const k = 2 * (loops - 1);  // the newest loop is last
+    showNotice('loop closed' + (h.frame === undefined ? '' : ' at frame ' + h.frame) +
+               ': keyframe ' + s.loops[k + 1] + ' meets keyframe ' + s.loops[k]);
+    state.loopNotices += loops - state.loops;  // loops announced (several may come at once)
+  }
+  state.loops = loops;
+  state.viewMessages += 1;
+}
+
+let noticeTimer = null;
+function showNotice(text) {
+  const notice = document.getElementById('notice');
+  notice.textContent = state.notice = text;
+  notice.style.display = 'block';
+  clearTimeout(noticeTimer);
+  noticeTimer = setTimeout(() => { notice.style.display = 'none'; }, NOTICE_MS);
 }
 
 function connect() {
@@ -257,7 +361,14 @@ function connect() {
   socket.onmessage = (event) => {
     if (typeof event.data === 'string') {
       const status = JSON.parse(event.data);
-      if (status.type === 'status') { state.paused = status.paused; drawNumbers(state.numbers); }
+      if (status.type === 'status') {
+        state.paused = status.paused;
+        // The toggles hold for every browser: another page may have changed them.
+        state.graphOn = document.getElementById('graph').checked = !!status.graph;
+        state.depthOn = document.getElementById('depth').checked = !!status.depth;
+        drawNumbers(state.numbers);
+        if (lastMessage) drawScene(lastMessage, lastMessage.sections);
+      }
       return;
     }
     try { onFrame(event.data); } catch (e) { state.error = String(e); }
@@ -277,6 +388,12 @@ document.getElementById('shot').onclick = () => {
 document.getElementById('erased').onchange = document.getElementById('gt').onchange = () => {
   if (lastMessage) drawScene(lastMessage, lastMessage.sections);
 };
+for (const name of ['graph', 'depth']) {
+  document.getElementById(name).onchange = (e) => {
+    send(name, {on: e.target.checked});
+    if (lastMessage) drawScene(lastMessage, lastMessage.sections);
+  };
+}
 window.addEventListener('keydown', (e) => {
   if (e.key === ' ') send(state.paused ? 'resume' : 'pause');
   if (e.key === 'n') send('step');
