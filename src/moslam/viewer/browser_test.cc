@@ -171,7 +171,7 @@ class Page {
 // before the page asks; turned on from the page's checkboxes, they arrive with the paused frame
 // (sent again), the spanning tree linking every keyframe. The keypoints the mask took away come
 // without asking, once a browser watches.
-void CheckOnDemand(Page& page, int frame) {
+void CheckOnDemand(Page& page, int frame, const std::string& run_log) {
   json s = page.State();
   EXPECT_EQ(s.value("graphMessages", -1), 0) << s.dump();
   EXPECT_EQ(s.value("covisibilityEdges", -1), 0);
@@ -186,7 +186,8 @@ void CheckOnDemand(Page& page, int frame) {
         return s.value("graphMessages", 0) > 0 && s.value("depthWidth", 0) > 0;
       },
       30))
-      << s.dump();
+      << s.dump() << "\n"
+      << ReadFile(run_log);
   EXPECT_TRUE(s.value("graphOn", false));
   EXPECT_TRUE(s.value("depthOn", false));
   EXPECT_EQ(s.value("frame", -1), frame) << "the toggles moved the run";
@@ -280,7 +281,7 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
   ASSERT_FALSE(page.State().value("finished", true)) << "the run ended before the pause took";
   std::this_thread::sleep_for(std::chrono::seconds(1));
   EXPECT_EQ(page.State().value("frame", -1), stopped_at) << "the run went on while paused";
-  CheckOnDemand(page, stopped_at);
+  CheckOnDemand(page, stopped_at, dir.path() + "/run.log");
   if (const char* shot = std::getenv("MOSLAM_VIEWER_SCREENSHOT")) {
     std::this_thread::sleep_for(std::chrono::seconds(1));  // the page draws the images async
     const json reply = page.Call("Page.captureScreenshot", {{"format", "png"}});

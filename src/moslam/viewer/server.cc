@@ -27,6 +27,10 @@ using Handle = websocketpp::connection_hdl;
 
 // How long Stop() lets close frames reach the browsers before the server thread ends.
 constexpr auto kCloseGrace = std::chrono::milliseconds(300);
+// How often a browser that skipped the latest picture is looked at again: once it has read what
+// it was behind on, it gets that picture, so the last one of a run (and a paused frame) always
+// arrives, however slowly the browser reads.
+constexpr auto kCatchUpInterval = std::chrono::milliseconds(250);
 
 std::string ReadWhole(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -78,6 +82,9 @@ class Server::Impl {
           ws_.close(h, websocketpp::close::status::going_away, "", ec);
         }
         clients_.clear();
+        behind_.clear();
+        stopping_ = true;
+        if (catch_up_timer_) catch_up_timer_->cancel();
         stats_.clients = 0;
         signals_.reset();
         // The close frames get a moment to leave; then the loop ends, whoever still hangs on.
@@ -93,8 +100,18 @@ class Server::Impl {
   void Broadcast(std::shared_ptr<const std::string> message, bool binary, bool keep) {
     const auto opcode =
         binary ? websocketpp::frame::opcode::binary : websocketpp::frame::opcode::text;
-    for (const Handle& h : clients_) Send(h, *message, opcode);
+    for (const Handle& h : clients_) {
+      const bool sent = Send(h, *message, opcode);
+      if (binary && keep) {
+        if (sent) {
+          behind_.erase(h);
+        } else {
+          behind_.insert(h);
+        }
+      }
+    }
     if (keep) (binary ? kept_binary_ : kept_text_) = std::move(message);
+    if (!behind_.empty()) ArmCatchUp();
   }
 
   int WaitForStopSignal() {
@@ -138,16 +155,41 @@ class Server::Impl {
     }
   }
 
-  void Send(const Handle& h, const std::string& message, websocketpp::frame::opcode::value op) {
+  // Whether `message` went to the connection (false: skipped, it is too far behind, or gone).
+  bool Send(const Handle& h, const std::string& message, websocketpp::frame::opcode::value op) {
     websocketpp::lib::error_code ec;
     WsServer::connection_ptr con = ws_.get_con_from_hdl(h, ec);
-    if (ec || !con) return;
+    if (ec || !con) return false;
     if (con->get_buffered_amount() > options_.max_buffered_bytes) {
       ++stats_.skipped;
-      return;
+      return false;
     }
     con->send(message, op);
     ++stats_.sent;
+    return true;
+  }
+
+  // Server thread: the browsers that skipped the kept picture get it once they have caught up.
+  void ArmCatchUp() {
+    if (catch_up_armed_ || stopping_) return;
+    catch_up_armed_ = true;
+    if (!catch_up_timer_)
+      catch_up_timer_ = std::make_unique<asio::steady_timer>(ws_.get_io_service());
+    catch_up_timer_->expires_after(kCatchUpInterval);
+    catch_up_timer_->async_wait([this](const asio::error_code& ec) {
+      catch_up_armed_ = false;
+      if (ec || stopping_ || !kept_binary_) return;
+      for (auto it = behind_.begin(); it != behind_.end();) {
+        websocketpp::lib::error_code error;
+        if (!ws_.get_con_from_hdl(*it, error) || error ||
+            Send(*it, *kept_binary_, websocketpp::frame::opcode::binary)) {
+          it = behind_.erase(it);
+        } else {
+          ++it;
+        }
+      }
+      if (!behind_.empty()) ArmCatchUp();
+    });
   }
 
   void OnHttp(Handle h) {
@@ -179,6 +221,7 @@ class Server::Impl {
 
   void OnClose(Handle h) {
     clients_.erase(h);
+    behind_.erase(h);
     stats_.clients = clients_.size();
   }
 
@@ -206,12 +249,17 @@ class Server::Impl {
   // WaitForStopSignal's and Stop()'s; declared after ws_, so gone before its io service.
   std::unique_ptr<asio::signal_set> signals_;
   std::unique_ptr<asio::steady_timer> stop_timer_;
+  std::unique_ptr<asio::steady_timer> catch_up_timer_;  // ArmCatchUp's
   std::thread thread_;
   std::once_flag stopped_;
   int port_ = 0;
   ServerStats stats_;
   // Server thread only.
   std::set<Handle, std::owner_less<Handle>> clients_;
+  // Clients that skipped the kept binary message (Broadcast), and whether a look is due.
+  std::set<Handle, std::owner_less<Handle>> behind_;
+  bool catch_up_armed_ = false;
+  bool stopping_ = false;
   std::shared_ptr<const std::string> kept_binary_, kept_text_;
 };
 

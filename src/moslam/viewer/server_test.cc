@@ -162,6 +162,30 @@ TEST(ViewerServer, AStalledClientIsSkippedNotWaitedFor) {
       std::chrono::seconds(60)));
 }
 
+// The kept picture (the latest frame; at the end of a run the final one) is not lost to a browser
+// that was behind when it was broadcast: it follows once the browser has read the rest, with no
+// later broadcast needed.
+TEST(ViewerServer, TheKeptPictureReachesABrowserThatWasBehind) {
+  ServerOptions options = AnyPort();
+  options.max_buffered_bytes = 1u << 20;
+  Server server(options, nullptr);
+  WsClient reader(WsUrl(server));
+  ASSERT_TRUE(reader.WaitOpen());
+  ASSERT_TRUE(WaitClients(server, 1));
+  const auto big = std::make_shared<const std::string>(std::string(512 * 1024, 'm'));
+  const auto last = std::make_shared<const std::string>("last");
+  size_t skipped = 0;
+  InServerThread(server, [&] {
+    for (int i = 0; i < 20; ++i) server.Broadcast(big, true, /*keep=*/false);
+    skipped = server.stats().skipped.load();
+    server.Broadcast(last, true, /*keep=*/true);
+    skipped = server.stats().skipped.load() - skipped;
+  });
+  EXPECT_EQ(skipped, 1u) << "the reader was not behind: the test tests nothing";
+  EXPECT_TRUE(reader.WaitForMessage([](const auto& m) { return m.payload == "last"; },
+                                    std::chrono::seconds(60)));
+}
+
 TEST(ViewerServer, StopsWithClientsConnected) {
   auto server = std::make_unique<Server>(AnyPort(), nullptr);
   WsClient client(WsUrl(*server));
