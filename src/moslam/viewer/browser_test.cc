@@ -275,14 +275,22 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
       std::getenv("MOSLAM_VIEWER_PAUSE_AT") ? std::atoi(std::getenv("MOSLAM_VIEWER_PAUSE_AT")) : 3;
   ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) >= pause_at; }, 300));
   page.Click("pause");
-  ASSERT_TRUE(Eventually([&] { return page.State().value("paused", false); }, 10));
+  ASSERT_TRUE(Eventually([&] { return page.State().value("paused", false); }, 10))
+      << page.State().dump();
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const int stopped_at = page.State().value("frame", -1);
-  ASSERT_FALSE(page.State().value("finished", true)) << "the run ended before the pause took";
+  ASSERT_FALSE(page.State().value("finished", true))
+      << "the run ended before the pause took: " << page.State().dump() << "\n"
+      << ReadFile(dir.path() + "/run.log");
   std::this_thread::sleep_for(std::chrono::seconds(1));
   EXPECT_EQ(page.State().value("frame", -1), stopped_at) << "the run went on while paused";
   CheckOnDemand(page, stopped_at, dir.path() + "/run.log");
   if (const char* shot = std::getenv("MOSLAM_VIEWER_SCREENSHOT")) {
+    // Closer than the page's default orbit (3.3 m behind the camera), so that the keyframe graph
+    // of a small room shows; the page's own camera and controls, from its global scope.
+    page.Eval(
+        "camera.position.sub(controls.target).multiplyScalar(0.4).add(controls.target);"
+        "controls.update()");
     std::this_thread::sleep_for(std::chrono::seconds(1));  // the page draws the images async
     const json reply = page.Call("Page.captureScreenshot", {{"format", "png"}});
     std::ofstream(shot, std::ios::binary)

@@ -1,5 +1,6 @@
 #include "moslam/viewer/server.h"
 
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -31,6 +32,12 @@ constexpr auto kCloseGrace = std::chrono::milliseconds(300);
 // it was behind on, it gets that picture, so the last one of a run (and a paused frame) always
 // arrives, however slowly the browser reads.
 constexpr auto kCatchUpInterval = std::chrono::milliseconds(250);
+// A page that acknowledges the pictures it has drawn ({"cmd": "ack"}) has at most this many not
+// yet acknowledged: the browser's own network stack reads the socket whatever the page keeps up
+// with, so the bytes this server has not sent say nothing of how far behind a slow page is (a
+// page drawing 6 pictures a second of a run at 20 frames/s fell seconds behind, its pause
+// arriving after the run had ended).
+constexpr int kMaxUnacknowledged = 2;
 
 std::string ReadWhole(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -83,6 +90,7 @@ class Server::Impl {
         }
         clients_.clear();
         behind_.clear();
+        unacknowledged_.clear();
         stopping_ = true;
         if (catch_up_timer_) catch_up_timer_->cancel();
         stats_.clients = 0;
@@ -160,13 +168,29 @@ class Server::Impl {
     websocketpp::lib::error_code ec;
     WsServer::connection_ptr con = ws_.get_con_from_hdl(h, ec);
     if (ec || !con) return false;
-    if (con->get_buffered_amount() > options_.max_buffered_bytes) {
+    const bool binary = op == websocketpp::frame::opcode::binary;
+    const auto acks = binary ? unacknowledged_.find(h) : unacknowledged_.end();
+    if (con->get_buffered_amount() > options_.max_buffered_bytes ||
+        (acks != unacknowledged_.end() && acks->second >= kMaxUnacknowledged)) {
       ++stats_.skipped;
       return false;
     }
     con->send(message, op);
+    if (acks != unacknowledged_.end()) ++acks->second;
     ++stats_.sent;
     return true;
+  }
+
+  // A page has drawn a picture: from now on it gets a new one only while fewer than
+  // kMaxUnacknowledged are undrawn, and the latest one at once if it skipped it.
+  void OnAcknowledged(const Handle& h) {
+    ++stats_.acknowledged;
+    int& undrawn = unacknowledged_[h];
+    undrawn = std::max(0, undrawn - 1);
+    if (behind_.count(h) > 0 && kept_binary_ &&
+        Send(h, *kept_binary_, websocketpp::frame::opcode::binary)) {
+      behind_.erase(h);
+    }
   }
 
   // Server thread: the browsers that skipped the kept picture get it once they have caught up.
@@ -222,6 +246,7 @@ class Server::Impl {
   void OnClose(Handle h) {
     clients_.erase(h);
     behind_.erase(h);
+    unacknowledged_.erase(h);
     stats_.clients = clients_.size();
   }
 
@@ -237,6 +262,10 @@ class Server::Impl {
         !command["cmd"].is_string()) {
       ++stats_.ignored;
       spdlog::debug("viewer: ignored a message that is no command");
+      return;
+    }
+    if (command["cmd"] == "ack") {
+      OnAcknowledged(h);  // the server's own: flow control, not a command of the viewer's
       return;
     }
     if (on_command_) on_command_(command);
@@ -258,6 +287,8 @@ class Server::Impl {
   std::set<Handle, std::owner_less<Handle>> clients_;
   // Clients that skipped the kept binary message (Broadcast), and whether a look is due.
   std::set<Handle, std::owner_less<Handle>> behind_;
+  // Pages that acknowledge what they draw (OnAcknowledged): pictures sent and not yet drawn.
+  std::map<Handle, int, std::owner_less<Handle>> unacknowledged_;
   bool catch_up_armed_ = false;
   bool stopping_ = false;
   std::shared_ptr<const std::string> kept_binary_, kept_text_;

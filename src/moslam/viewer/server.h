@@ -23,7 +23,10 @@ struct ServerOptions {
   // (examples/js/controls/OrbitControls.js).
   std::string three_dir = "/usr/share/javascript/three";
   // A browser with more than this many bytes not yet sent to it skips updates until it has read
-  // them: a slow or stalled browser gets fewer updates and holds no more memory than this.
+  // them: a slow or stalled browser gets fewer updates and holds no more memory than this. A page
+  // that acknowledges each picture it has drawn ({"cmd": "ack"}, as web/viewer.js does) also
+  // skips updates while two are undrawn, and gets the latest at once when it catches up: a
+  // browser reads its socket ahead of a slow page, so the bytes alone do not show that page's lag.
   size_t max_buffered_bytes = 8u << 20;
   // Messages from browsers are short commands; a longer one closes its connection.
   size_t max_message_bytes = 4096;
@@ -36,13 +39,15 @@ struct ServerStats {
   std::atomic<size_t> sent{0};            // messages handed to a connection
   std::atomic<size_t> skipped{0};         // messages not sent to a client too far behind
   std::atomic<size_t> ignored{0};         // client messages that were no command
+  std::atomic<size_t> acknowledged{0};    // pictures pages said they had drawn ("ack")
   std::atomic<size_t> http_not_found{0};  // HTTP requests for no known path
 };
 
 class Server {
  public:
-  // Called in the server thread with each command a browser sends ({"cmd": "..."} objects);
-  // everything else is ignored (a binary message closes its connection).
+  // Called in the server thread with each command a browser sends ({"cmd": "..."} objects) but
+  // "ack", which the server keeps (ServerOptions::max_buffered_bytes); everything else is ignored
+  // (a binary message closes its connection).
   using CommandHandler = std::function<void(const nlohmann::json& command)>;
 
   // Listens and starts the thread. InputError naming the address when it cannot listen (the port

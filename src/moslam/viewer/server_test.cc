@@ -186,6 +186,30 @@ TEST(ViewerServer, TheKeptPictureReachesABrowserThatWasBehind) {
                                     std::chrono::seconds(60)));
 }
 
+// A page that acknowledges what it draws has at most two pictures undrawn; the ones broadcast
+// meanwhile are skipped, and its next acknowledgement brings the latest.
+TEST(ViewerServer, AnAcknowledgingPageGetsTwoUndrawnPicturesThenTheLatest) {
+  Server server(AnyPort(), nullptr);
+  WsClient page(WsUrl(server));
+  ASSERT_TRUE(page.WaitOpen());
+  ASSERT_TRUE(WaitClients(server, 1));
+  page.Send(R"({"cmd": "ack"})");  // a page acknowledges from its first picture on
+  ASSERT_TRUE(testing::PollUntil([&] { return server.stats().acknowledged.load() == 1; }));
+  const size_t skipped_before = server.stats().skipped.load();
+  for (int i = 1; i <= 5; ++i) {
+    InServerThread(server, [&] {
+      server.Broadcast(std::make_shared<const std::string>(std::to_string(i)), true, true);
+    });
+  }
+  ASSERT_TRUE(page.WaitForMessage([](const auto& m) { return m.payload == "2"; }));
+  EXPECT_EQ(server.stats().skipped.load() - skipped_before, 3u);
+  page.Send(R"({"cmd": "ack"})");
+  EXPECT_TRUE(page.WaitForMessage([](const auto& m) { return m.payload == "5"; }));
+  for (const auto& m : page.messages()) {
+    EXPECT_TRUE(m.payload != "3" && m.payload != "4") << m.payload;
+  }
+}
+
 TEST(ViewerServer, StopsWithClientsConnected) {
   auto server = std::make_unique<Server>(AnyPort(), nullptr);
   WsClient client(WsUrl(*server));

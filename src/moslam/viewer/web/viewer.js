@@ -11,7 +11,7 @@ const KEYPOINT_COLOURS = [  // slam::ViewKeypointKind
   ['untracked', '#ffd24d'], ['tracked', '#33dd55'], ['near the mask', '#ff3344'],
   ['seen moving', '#33e0ff']];
 const REJECTED_COLOUR = '#ff66ff';  // keypoints the movable mask took away (drawn as crosses)
-const GRAPH_COLOURS = {covisibility: 0x2e8b57, spanning_tree: 0xdddddd, loop: 0xff33ff};
+const GRAPH_COLOURS = {covisibility: 0x00c8c8, spanning_tree: 0xffffff, loop: 0xff33ff};
 const ERASED_FIRST = 4;
 const NOTICE_MS = 6000;  // how long a closed loop's notice stays
 
@@ -372,6 +372,9 @@ function connect() {
       return;
     }
     try { onFrame(event.data); } catch (e) { state.error = String(e); }
+    // Drawn: the server sends the next picture only while fewer than two are undrawn, so a page
+    // slower than the run shows the latest frame rather than falling behind (server.h).
+    send('ack');
   };
 }
 
