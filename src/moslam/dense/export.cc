@@ -60,11 +60,12 @@ RunInfo ReadRunInfo(const std::string& run_dir) {
     summary = nlohmann::json::parse(in);
     RunInfo info;
     const std::string format = summary.at("dataset").at("format").get<std::string>();
-    // A video run (`moslam run --dataset video`) is monocular: there is no depth to fuse, and
-    // its format is no data set that io::ReadDataset could read back.
-    if (format == "video") {
-      throw InputError(path +
-                       ": a video run is monocular, it has no depth to fuse (RGB-D or stereo)");
+    // A monocular run (an image folder, KITTI with --monocular, a video) has no depth to fuse,
+    // whatever its data set holds; the summary says which sensor ran. A video's format is no
+    // data set that io::ReadDataset could read back, so this comes before parsing it.
+    if (summary.at("dataset").value("sensor", "") == "monocular") {
+      throw InputError(path + ": a " + (format == "video" ? "video" : "monocular") +
+                       " run is monocular, it has no depth to fuse (RGB-D or stereo)");
     }
     const auto parsed = io::ParseDatasetFormat(format);
     if (!parsed) throw InputError(path + ": unknown dataset.format '" + format + "'");
