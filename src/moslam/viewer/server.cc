@@ -26,8 +26,11 @@ namespace {
 using WsServer = websocketpp::server<websocketpp::config::asio>;
 using Handle = websocketpp::connection_hdl;
 
-// How long Stop() lets close frames reach the browsers before the server thread ends.
-constexpr auto kCloseGrace = std::chrono::milliseconds(300);
+// The longest Stop() waits for the browsers' close handshakes before the server thread ends (it
+// ends as soon as every browser has answered; one that never answers is cut when the server is
+// destroyed). A fixed 300 ms was too short under TSan on a loaded 2-core machine: the loop ended
+// before the browser's answer was read, and the browser waited for its own 5 s timeout.
+constexpr auto kCloseGrace = std::chrono::seconds(3);
 // How often a browser that skipped the latest picture is looked at again: once it has read what
 // it was behind on, it gets that picture, so the last one of a run (and a paused frame) always
 // arrives, however slowly the browser reads.
@@ -87,6 +90,7 @@ class Server::Impl {
         ws_.stop_listening(ec);
         for (const Handle& h : clients_) {
           ws_.close(h, websocketpp::close::status::going_away, "", ec);
+          if (!ec) closing_.insert(h);
         }
         clients_.clear();
         behind_.clear();
@@ -98,6 +102,7 @@ class Server::Impl {
         // The close frames get a moment to leave; then the loop ends, whoever still hangs on.
         stop_timer_ = std::make_unique<asio::steady_timer>(ws_.get_io_service(), kCloseGrace);
         stop_timer_->async_wait([this](const asio::error_code&) { ws_.stop(); });
+        if (closing_.empty()) ws_.stop();
       });
       if (thread_.joinable()) thread_.join();
     });
@@ -237,6 +242,14 @@ class Server::Impl {
   }
 
   void OnOpen(Handle h) {
+    if (stopping_) {
+      // Its handshake finished after Stop() had closed the others (the browser may already
+      // think itself connected): it is closed like them.
+      websocketpp::lib::error_code ec;
+      ws_.close(h, websocketpp::close::status::going_away, "", ec);
+      if (!ec) closing_.insert(h);
+      return;
+    }
     clients_.insert(h);
     stats_.clients = clients_.size();
     if (kept_text_) Send(h, *kept_text_, websocketpp::frame::opcode::text);
@@ -244,6 +257,7 @@ class Server::Impl {
   }
 
   void OnClose(Handle h) {
+    if (stopping_ && closing_.erase(h) > 0 && closing_.empty()) ws_.stop();
     clients_.erase(h);
     behind_.erase(h);
     unacknowledged_.erase(h);
@@ -289,6 +303,8 @@ class Server::Impl {
   std::set<Handle, std::owner_less<Handle>> behind_;
   // Pages that acknowledge what they draw (OnAcknowledged): pictures sent and not yet drawn.
   std::map<Handle, int, std::owner_less<Handle>> unacknowledged_;
+  // Once stopping: the browsers sent a close frame whose handshake has not ended.
+  std::set<Handle, std::owner_less<Handle>> closing_;
   bool catch_up_armed_ = false;
   bool stopping_ = false;
   std::shared_ptr<const std::string> kept_binary_, kept_text_;

@@ -214,6 +214,9 @@ TEST(ViewerServer, StopsWithClientsConnected) {
   auto server = std::make_unique<Server>(AnyPort(), nullptr);
   WsClient client(WsUrl(*server));
   ASSERT_TRUE(client.WaitOpen());
+  // The client's open handler may run before the server's (the server's runs once its handshake
+  // reply is written): the server has to know it for it to be closed.
+  ASSERT_TRUE(WaitClients(*server, 1));
   server->Stop();
   server->Stop();  // idempotent
   EXPECT_TRUE(client.WaitClosed());
