@@ -7,7 +7,9 @@ cd "$(dirname "$0")/.."
 
 kind="${1:-release}"
 scripts/setup.sh
+t0=$(date +%s)
 scripts/build.sh "$kind"
+t1=$(date +%s)
 case "$kind" in
   release) dir=build ;;
   *) dir="build-$kind" ;;
@@ -29,4 +31,13 @@ if [[ "$kind" == tsan ]]; then
   # It runs the tests whose code runs in several threads (label `threads`) only.
   labels=(-L threads)
 fi
+# MOSLAM_TIMING_FILE (.ci/run): where the build's and the tests' seconds are appended, also when
+# a test fails.
+timing() {
+  local rc=$?
+  [[ -n "${MOSLAM_TIMING_FILE:-}" ]] &&
+    echo "$kind: build $((t1 - t0)) s, tests $(($(date +%s) - t1)) s (exit $rc)" >> "$MOSLAM_TIMING_FILE"
+  return 0
+}
+trap timing EXIT
 ctest --test-dir "$dir" --output-on-failure -j "${MOSLAM_JOBS:-$(nproc)}" "${labels[@]}"
