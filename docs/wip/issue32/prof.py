@@ -41,6 +41,6 @@ A = gt[t0] @ np.linalg.inv(est[t0])
 drift = np.linalg.norm((A @ est[t1])[:3, 3] - gt[t1][:3, 3])
 s = json.load(open(os.path.join(run, 'summary.json')))
 ate = s.get('ate') or {}
-print(json.dumps({'ate': ate.get('rmse_m', ate.get('rmse')), 'drift_m': drift,
+print(json.dumps({'ate': (ate.get('translation_m') or {}).get('rmse'), 'drift_m': drift,
                   'loops': s.get('loops_closed', len(s.get('loops', []))),
                   'refused': s.get('loops_rejected'), 'frames': len(common)}))
