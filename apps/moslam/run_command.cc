@@ -86,6 +86,7 @@ struct RunArgs {
   bool viewer_on = false;
   std::string viewer_host = viewer::ServerOptions{}.host;
   bool viewer_paused = false;
+  int64_t viewer_pause_at = -1;  // -1: none
   bool viewer_exit = false;
 };
 
@@ -279,6 +280,7 @@ std::unique_ptr<viewer::LiveViewer> MakeViewer(const RunArgs& args, const io::Se
     options.server.port = static_cast<int>(*port);
   }
   options.start_paused = args.viewer_paused;
+  if (args.viewer_pause_at >= 0) options.pause_at = static_cast<size_t>(args.viewer_pause_at);
   auto live = std::make_unique<viewer::LiveViewer>(options, stop);
   live->SetGroundTruth(runner::ReadGroundTruth(sequence));
   return live;
@@ -406,6 +408,13 @@ void AddViewerOptions(CLI::App* command, RunArgs* args) {
       ->capture_default_str();
   command->add_flag("--viewer-paused", args->viewer_paused,
                     "Stop after the first frame until the page resumes or steps");
+  command
+      ->add_option("--viewer-pause-at", args->viewer_pause_at,
+                   "Stop at frame N (the data set's index; the first frame from N on) until the "
+                   "page resumes or steps, as if Pause had been pressed there; a run cannot end "
+                   "before it, however late a page looks (the browser test relies on it)")
+      ->check(CLI::NonNegativeNumber)
+      ->needs("--viewer");
   command->add_flag("--viewer-exit", args->viewer_exit,
                     "End when the run ends instead of keeping the page up until Ctrl-C");
 }

@@ -27,10 +27,13 @@ void View(const ViewArgs& args) {
   const auto message =
       std::make_shared<const std::string>(viewer::EncodeSnapshot(run.snapshot, run.picture));
   server.Post([&server, message] { server.Broadcast(message, /*binary=*/true); });
-  spdlog::info("view: {} ({} poses, {} keyframes{}) at {} until Ctrl-C", args.run_dir,
+  const size_t loops = run.snapshot.view ? run.snapshot.view->loops.size() / 2 : 0;
+  spdlog::info("view: {} ({} poses, {} keyframes, {} loops{}{}) at {} until Ctrl-C", args.run_dir,
                run.picture.trajectory.size() / 3,
-               run.snapshot.view ? run.snapshot.view->keyframes.size() : 0,
-               run.map_path.empty() ? ", no map file" : ", map " + run.map_path, server.url());
+               run.snapshot.view ? run.snapshot.view->keyframes.size() : 0, loops,
+               run.map_path.empty() ? ", no map file" : ", map " + run.map_path,
+               run.graph_from.empty() ? ", no keyframe graph" : ", graph from " + run.graph_from,
+               server.url());
   server.WaitForStopSignal();
 }
 
@@ -41,8 +44,9 @@ void AddViewCommand(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "view",
       "Show a finished run (the folder `moslam run` wrote) in the viewer's page: trajectory, "
-      "keyframes, ground truth, and the final map when the folder holds a *.map file "
-      "(--save-map RUN_DIR/map.map); served until Ctrl-C (docs/RUNNING.md)");
+      "keyframes, their graph and closed loops (keyframe_graph.json), ground truth, and the final "
+      "map when the folder holds a *.map file (--save-map RUN_DIR/map.map); served until Ctrl-C "
+      "(docs/RUNNING.md)");
   command->add_option("RUN_DIR", args->run_dir, "The run's output folder")->required();
   command->add_option("--port", args->port, "Port of the page")
       ->check(CLI::Range(0, 65535))

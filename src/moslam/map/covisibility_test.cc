@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "moslam/map/keyframe_graph.h"
 #include "moslam/map/map.h"
 
 namespace moslam::map {
@@ -135,6 +136,35 @@ TEST(MapPoint, DescriptorIsTheMedoidAndScaleRangeFollowsTheReference) {
   EXPECT_GT(p->normal.z(), 0.8);
   EXPECT_EQ(p->PredictScale(4.0f * 1.2f, std::log(1.2f), 2), 0);
   EXPECT_EQ(p->PredictScale(4.0f, std::log(1.2f), 2), 1);
+}
+
+// The graph a viewer draws: edges by index into the good keyframes, so an erased keyframe shifts
+// the later indices and takes its edges along; covisibility only as heavy as asked, both ways.
+TEST(KeyFrameGraph, IndexesTheGoodKeyFramesAndKeepsHeavyEdgesAndLoops) {
+  Map map;
+  std::lock_guard<std::mutex> lock(map.mutex());
+  std::vector<std::shared_ptr<KeyFrame>> kfs;
+  for (int k = 0; k < 4; ++k) kfs.push_back(map.CreateKeyFrame(MakeFrame(300), geometry::SE3()));
+  SharePoints(&map, {kfs[0], kfs[1]}, 0, 120);
+  SharePoints(&map, {kfs[1], kfs[2]}, 120, 50);  // k2 only through k1: erased below
+  SharePoints(&map, {kfs[1], kfs[3]}, 170, 110);
+  SharePoints(&map, {kfs[0], kfs[3]}, 280, 10);  // too light to draw
+  for (auto& kf : kfs) kf->UpdateConnections();
+  map.EraseKeyFrame(kfs[2]);
+  map.AddLoopEdge(kfs[3]->id, kfs[0]->id);
+
+  const IndexedKeyFrameGraph light = IndexKeyFrameGraph(map, /*with_graph=*/false, 100);
+  EXPECT_EQ(light.ids, (std::vector<uint64_t>{kfs[0]->id, kfs[1]->id, kfs[3]->id}));
+  EXPECT_EQ(light.poses.size(), 3u);
+  EXPECT_EQ(light.loops, (std::vector<uint32_t>{0, 2}));  // loop keyframe first, then current
+  EXPECT_TRUE(light.covisibility.empty());
+  EXPECT_TRUE(light.spanning_tree.empty());
+
+  const IndexedKeyFrameGraph graph = IndexKeyFrameGraph(map, /*with_graph=*/true, 100);
+  EXPECT_EQ(graph.loops, light.loops);
+  EXPECT_EQ(graph.covisibility,
+            (std::vector<uint32_t>{0, 1, 120, 1, 0, 120, 1, 2, 110, 2, 1, 110}));
+  EXPECT_EQ(graph.spanning_tree, (std::vector<uint32_t>{1, 0, 2, 1}));
 }
 
 }  // namespace

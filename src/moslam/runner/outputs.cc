@@ -364,6 +364,9 @@ std::string WriteRunOutputs(const io::Sequence& sequence, const RunResult& resul
         [&] { WriteOrbSlamKitti(result.camera, (out / "CameraTrajectory_kitti.txt").string()); });
   }
   attempt([&] { WriteOrbSlamTum(result.keyframes, 7, (out / "KeyFrameTrajectory.txt").string()); });
+  if (result.graph) {
+    attempt([&] { WriteKeyFrameGraph(*result.graph, (out / "keyframe_graph.json").string()); });
+  }
   attempt([&] { WriteFramesCsv(result, (out / "frames.csv").string()); });
   std::optional<RunAte> ate;
   if (camera) {

@@ -5,6 +5,8 @@
 //   CameraTrajectory_kitti.txt  KITTI input only: the 3x4 T_world_cam row-major, 9 decimals
 //                               (ORB-SLAM2's SaveTrajectoryKITTI); frames without a pose are absent
 //   KeyFrameTrajectory.txt      TUM, keyframes; SaveKeyFrameTrajectoryTUM precision (6 / 7)
+//   keyframe_graph.json         their covisibility edges, spanning tree and closed loops, as the
+//                               viewer draws them (keyframe_graph.h); not for trackers without one
 //   frames.csv                  one row per frame, kFramesCsvHeader's columns
 //   summary.json                counts, per-stage time statistics, the per-frame breakdown
 //                               (segmentation, CRF, extraction, tracking, mapping), settings, data

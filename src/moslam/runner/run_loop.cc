@@ -303,6 +303,7 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource
   result.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   result.camera = tracker.CameraTrajectory();
   result.keyframes = tracker.KeyFrameTrajectory();
+  result.graph = FinalKeyFrameGraph(tracker, result.keyframes);
   result.map = tracker.Summary();
   return result;
 }

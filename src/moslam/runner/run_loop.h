@@ -17,6 +17,7 @@
 #include "moslam/io/image.h"
 #include "moslam/io/sequence.h"
 #include "moslam/runner/frame_loader.h"
+#include "moslam/runner/keyframe_graph.h"
 #include "moslam/runner/mask_source.h"
 #include "moslam/runner/tracker.h"
 
@@ -110,6 +111,8 @@ struct RunResult {
   std::vector<FrameRecord> frames;
   eval::Trajectory camera;     // Tracker::CameraTrajectory after Finish
   eval::Trajectory keyframes;  // Tracker::KeyFrameTrajectory after Finish
+  // Their graph (keyframe_graph.json); nullopt for a tracker that shows none.
+  std::optional<KeyFrameGraph> graph;
   slam::MapSummary map;
   double wall_s = 0.0;  // from the start of loading to the end of Finish
   RunEnd end = RunEnd::kCompleted;

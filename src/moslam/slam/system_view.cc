@@ -1,10 +1,10 @@
 #include "moslam/slam/system_view.h"
 
-#include <algorithm>
 #include <mutex>
-#include <optional>
 #include <unordered_set>
 #include <utility>
+
+#include "moslam/map/keyframe_graph.h"
 
 namespace moslam::slam {
 namespace {
@@ -43,46 +43,16 @@ void FillKeypoints(const Tracker::CurrentFrame& frame, SystemView* view) {
 }
 
 // The keyframes' poses, and the edges between them by index into view->keyframes: the closed
-// loops always, covisibility and spanning tree when asked. Under the map mutex.
+// loops always, covisibility and spanning tree when asked (map/keyframe_graph.h, which `moslam
+// view` uses on a saved map too). Under the map mutex.
 void FillKeyFrames(const map::Map& map, const ViewRequest& request, SystemView* view) {
-  view->keyframes.clear();
-  view->loops.clear();
-  view->covisibility.clear();
-  view->spanning_tree.clear();
+  map::IndexedKeyFrameGraph graph =
+      map::IndexKeyFrameGraph(map, request.graph, kViewCovisibilityMinWeight);
+  view->keyframes = std::move(graph.poses);
+  view->loops = std::move(graph.loops);
+  view->covisibility = std::move(graph.covisibility);
+  view->spanning_tree = std::move(graph.spanning_tree);
   view->has_graph = request.graph;
-  std::vector<uint64_t> ids;  // of view->keyframes, ascending as the map keeps them
-  for (const auto& [id, keyframe] : map.keyframes()) {
-    if (keyframe->bad()) continue;
-    ids.push_back(id);
-    view->keyframes.push_back(keyframe->T_world_cam());
-  }
-  const auto index = [&ids](uint64_t id) -> std::optional<uint32_t> {
-    const auto at = std::lower_bound(ids.begin(), ids.end(), id);
-    if (at == ids.end() || *at != id) return std::nullopt;
-    return static_cast<uint32_t>(at - ids.begin());
-  };
-  std::vector<std::pair<uint32_t, uint32_t>> loops;  // (current, loop): sorted, newest last
-  for (const auto& [a, b] : map.loop_edges()) {
-    const auto ia = index(a), ib = index(b);
-    if (a > b && ia && ib) loops.emplace_back(*ia, *ib);
-  }
-  std::sort(loops.begin(), loops.end());
-  for (const auto& [current, loop] : loops) view->loops.insert(view->loops.end(), {loop, current});
-  if (!request.graph) return;
-  for (const auto& [id, keyframe] : map.keyframes()) {
-    const auto i = index(id);
-    if (!i) continue;
-    for (const auto& [other, weight] : keyframe->connection_weights()) {
-      const auto j = index(other);
-      if (j && weight >= kViewCovisibilityMinWeight) {
-        view->covisibility.insert(view->covisibility.end(),
-                                  {*i, *j, static_cast<uint32_t>(weight)});
-      }
-    }
-    const std::shared_ptr<map::KeyFrame> parent = keyframe->parent();
-    const auto p = parent ? index(parent->id) : std::nullopt;
-    if (p) view->spanning_tree.insert(view->spanning_tree.end(), {*i, *p});
-  }
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // System::View, the viewer's copy of the system (issue 26), on a short synthetic walking sequence
 // (moslam synth w_xyz: people walking in front of a moving RGB-D camera, their exact masks given):
 // the copy agrees with the map's own counts, its keyframe edges are consistent, and the keypoints
-// the mask took away lie on the mask and are kept only while someone watches.
+// the mask took away lie on the mask and are kept only while someone watches. And on loop_room
+// (a 1 m circle in a static office): a loop closed mid-run is in the very next view, while the
+// run goes on, so a watching page marks and announces it when it happens, not at the end.
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -151,6 +153,61 @@ TEST(SystemView, AgreesWithTheMapAndKeepsWhatTheMaskTookOnlyWhileWatched) {
   EXPECT_GT(frames_with_rejected, kWatchedUntil / 2);
   EXPECT_GT(most_covisibility, 0u);
   EXPECT_GT(summary.keyframes, 1);
+}
+
+// The loop_room walk comes back to its first views after one lap (240 frames); deterministic, so
+// loop closing runs inside Track() and a loop is in the map when Track() returns.
+TEST(SystemView, ALoopClosedMidRunIsInTheNextViewWhileTheRunGoesOn) {
+  constexpr int kLoopFrames = 320;
+  const testing::TempDir dir;
+  synth::GeneratorOptions generator;
+  generator.preset = "loop_room";
+  generator.seed = 3;
+  generator.out = dir.path();
+  generator.frames = kLoopFrames;
+  generator.progress = false;
+  synth::GenerateSequence(generator);
+  const io::Sequence sequence = io::ReadDataset(dir.path());
+  SystemOptions options;
+  options.sensor = sequence.sensor;
+  options.settings = io::LoadOrbSlamSettings(dir.path() + "/settings.yaml", sequence.sensor);
+  options.deterministic = true;
+  options.vocabulary = TrainVocabulary(dir.path(), 5);
+  System system(options);
+  int first_loop_frame = -1;
+  size_t loops_seen = 0;
+  std::pair<double, double> first_loop_times;  // (current, loop) keyframe timestamps
+  for (int i = 0; i < kLoopFrames; ++i) {
+    system.Track(LoadFrameInput(sequence.frames[i], options));
+    SystemView view;
+    system.View(&view);  // as a page that shows no keyframe graph gets it
+    SCOPED_TRACE(::testing::Message() << "frame " << i);
+    EXPECT_GE(view.loops.size() / 2, loops_seen) << "a loop left the view";
+    loops_seen = view.loops.size() / 2;
+    if (loops_seen == 0 || first_loop_frame >= 0) continue;
+    first_loop_frame = i;
+    // Its two keyframes, by the indices the page draws them at.
+    const eval::Trajectory keyframes = system.KeyFrameTrajectory();
+    ASSERT_EQ(keyframes.size(), view.keyframes.size());
+    first_loop_times = {keyframes.timestamps.at(view.loops[1]),
+                        keyframes.timestamps.at(view.loops[0])};
+  }
+  system.Finish();
+  const MapSummary summary = system.Summary();
+  std::printf("loop_room seed 3, %d frames: first loop in the view at frame %d, %d loops closed\n",
+              kLoopFrames, first_loop_frame, summary.loops_closed);
+  ASSERT_GE(first_loop_frame, 0) << "no loop closed";
+  // Seen mid-run: the run went on for frames after it, each view still holding it.
+  EXPECT_LT(first_loop_frame, kLoopFrames - 10);
+  EXPECT_GE(summary.loops_closed, 1);
+  EXPECT_EQ(loops_seen, static_cast<size_t>(summary.loops_closed));
+  // The loop the view showed is the run's first closed loop, between keyframes a lap apart, and
+  // its current keyframe is no later than the frame whose view first showed it.
+  ASSERT_FALSE(summary.loop_times.empty());
+  EXPECT_NEAR(first_loop_times.first, summary.loop_times.front().first, 1e-9);
+  EXPECT_NEAR(first_loop_times.second, summary.loop_times.front().second, 1e-9);
+  EXPECT_GT(first_loop_times.first, first_loop_times.second + 7.0);
+  EXPECT_LE(first_loop_times.first, sequence.frames[first_loop_frame].timestamp);
 }
 
 }  // namespace

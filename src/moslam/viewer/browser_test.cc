@@ -3,12 +3,18 @@
 // DevTools protocol) checked against the run's summary.json; pause and step are pressed on the
 // page's buttons. Skips when chromium is not installed.
 //
+// Pausing mid-run relies on no timing: the run is started with --viewer-pause-at N (N two thirds
+// into the sequence, from its rgb.txt), so it stops there by itself however late the page
+// draws on a loaded machine; the page's own Pause is then pressed right after Resume, while the
+// run cannot have reached its end (a third of the sequence, paced in real time, is left).
+//
 // Environment: MOSLAM_VIEWER_DATASET=DIR runs an existing TUM-layout folder (with settings.yaml)
 // instead of a generated one; MOSLAM_VIEWER_SCREENSHOT=FILE.png saves the page while paused
 // mid-run, with the keyframe graph and the depth on (docs/ screenshots); MOSLAM_VIEWER_PAUSE_AT=N
-// pauses there at frame N or later instead of frame 3; MOSLAM_VIEWER_VOCABULARY=FILE runs with
-// that vocabulary (loop closing) instead of none; MOSLAM_VIEWER_SCREENSHOT_END=FILE.png saves the
-// page after the run.
+// holds the run at frame N instead; MOSLAM_VIEWER_VOCABULARY=FILE runs with that vocabulary
+// (loop closing) instead of none; MOSLAM_VIEWER_SCREENSHOT_END=FILE.png saves the page after the
+// run; MOSLAM_VIEWER_SCREENSHOT_VIEW=FILE.png saves `moslam view` of the finished run's folder,
+// with the keyframe graph on.
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -157,9 +163,17 @@ class Page {
                ? reply["result"]["result"].value("value", json())
                : json();
   }
+  // The page's state; a few tries, since on a loaded machine a DevTools call can go unanswered
+  // within its 10 s (and a page that is loading has none yet). An empty object when none came.
   json State() {
-    const json value = Eval("JSON.stringify(window.moslam || null)");
-    return value.is_string() ? json::parse(value.get<std::string>(), nullptr, false) : json();
+    for (int tries = 0; tries < 5; ++tries) {
+      const json value = Eval("JSON.stringify(window.moslam || null)");
+      const json state =
+          value.is_string() ? json::parse(value.get<std::string>(), nullptr, false) : json();
+      if (state.is_object()) return state;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+    return json::object();
   }
   void Click(const std::string& id) { Eval("document.getElementById('" + id + "').click()"); }
 
@@ -167,6 +181,45 @@ class Page {
   testing::WsClient socket_;
   int id_ = 0;
 };
+
+// The frames of a TUM-layout folder (the lines of its rgb.txt), 0 when it has none.
+int CountFrames(const std::string& folder) {
+  std::ifstream in(folder + "/rgb.txt");
+  int n = 0;
+  for (std::string line; std::getline(in, line);) n += !line.empty() && line[0] != '#';
+  return n;
+}
+
+void Screenshot(Page& page, const char* path) {
+  const json reply = page.Call("Page.captureScreenshot", {{"format", "png"}});
+  std::ofstream(path, std::ios::binary)
+      << Base64Decode(reply["result"].value("data", std::string()));
+}
+
+// Once the page shows the run paused: the frame it settles on (the paused frame is always sent,
+// but a page drawing slowly shows it late), which must then stay for a second; -1 when the run
+// ended instead.
+int PausedFrame(Page& page, const std::string& run_log) {
+  int frame = -1;
+  const bool settled = Eventually(
+      [&] {
+        const int before = page.State().value("frame", -1);
+        std::this_thread::sleep_for(std::chrono::seconds(1));
+        const json s = page.State();
+        frame = s.value("frame", -1);
+        return s.value("paused", false) && frame == before;
+      },
+      60);
+  EXPECT_TRUE(settled) << page.State().dump();
+  if (page.State().value("finished", true)) {
+    ADD_FAILURE() << "the run ended before the pause took: " << page.State().dump() << "\n"
+                  << ReadFile(run_log);
+    return -1;
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  EXPECT_EQ(page.State().value("frame", -1), frame) << "the run went on while paused";
+  return frame;
+}
 
 // What the page gets only on demand, on a run paused at `frame`: no keyframe graph or depth
 // before the page asks; turned on from the page's checkboxes, they arrive with the paused frame
@@ -204,6 +257,40 @@ void CheckOnDemand(Page& page, int frame, const std::string& run_log) {
       s.value("rejectedKeypoints", 0), s.value("rejectedMax", 0), s.value("loops", 0));
 }
 
+// `moslam view` of the finished run's folder in the same browser: the keyframes, the whole
+// keyframe graph (keyframe_graph.json) and the loops the live page ended with.
+void CheckViewOfTheFolder(Page& page, const std::string& moslam, const std::string& run_dir,
+                          const std::string& log, const json& live) {
+  const int port = FreePort();
+  Child view({moslam, "view", run_dir, "--port", std::to_string(port)}, log);
+  ASSERT_TRUE(Eventually([&] { return testing::HttpGet(port, "/").status == 200; }, 60))
+      << ReadFile(log);
+  page.Call("Page.navigate", {{"url", "http://127.0.0.1:" + std::to_string(port) + "/"}});
+  json s;
+  ASSERT_TRUE(Eventually(
+      [&] {
+        s = page.State();
+        return s.is_object() && s.value("replay", false) && s.value("messages", 0) > 0;
+      },
+      60))
+      << s.dump() << "\n"
+      << ReadFile(log);
+  EXPECT_EQ(s.value("keyframes", -1), live.value("keyframes", -2));
+  EXPECT_EQ(s.value("spanningEdges", -1), s.value("keyframes", 0) - 1);
+  EXPECT_EQ(s.value("covisibilityEdges", -1), live.value("covisibilityEdges", -2));
+  EXPECT_EQ(s.value("loops", -1), live.value("loops", -2));
+  EXPECT_EQ(s.value("error", std::string("?")), "") << s.dump();
+  std::printf("moslam view of the folder: %d keyframes, %d covisibility edges, %d loops\n",
+              s.value("keyframes", 0), s.value("covisibilityEdges", 0), s.value("loops", 0));
+  if (const char* shot = std::getenv("MOSLAM_VIEWER_SCREENSHOT_VIEW")) {
+    page.Click("graph");
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    Screenshot(page, shot);
+  }
+  view.Signal(SIGINT);
+  EXPECT_EQ(view.Wait(), 0) << ReadFile(log);
+}
+
 TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
   std::string chromium = FindOnPath("chromium");
   if (chromium.empty()) chromium = FindOnPath("chromium-browser");
@@ -222,17 +309,42 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
         dir.path() + "/synth.log");
     ASSERT_EQ(synth.Wait(), 0) << ReadFile(dir.path() + "/synth.log");
   }
+  // Where the run holds by itself: two thirds in, so that a map is there to look at and a third
+  // of the run is left for the page's own Pause.
+  const int frames = CountFrames(data);
+  ASSERT_GT(frames, 6) << data << "/rgb.txt";
+  const int hold_at = std::getenv("MOSLAM_VIEWER_PAUSE_AT")
+                          ? std::atoi(std::getenv("MOSLAM_VIEWER_PAUSE_AT"))
+                          : 2 * frames / 3;
   const int port = FreePort();
   const std::string run_dir = dir.path() + "/run";
+  const std::string run_log = dir.path() + "/run.log";
   Child run(
-      {moslam, "run", "--dataset", "tum", data, "--settings", data + "/settings.yaml",
-       "--mask-source", "synth-gt", "--movable", "person", "--out", run_dir, "--vocabulary",
+      {moslam,
+       "run",
+       "--dataset",
+       "tum",
+       data,
+       "--settings",
+       data + "/settings.yaml",
+       "--mask-source",
+       "synth-gt",
+       "--movable",
+       "person",
+       "--out",
+       run_dir,
+       "--vocabulary",
        std::getenv("MOSLAM_VIEWER_VOCABULARY") ? std::getenv("MOSLAM_VIEWER_VOCABULARY") : "none",
-       "--realtime", "--viewer", std::to_string(port), "--viewer-paused"},
-      dir.path() + "/run.log");
+       "--realtime",
+       "--viewer",
+       std::to_string(port),
+       "--viewer-paused",
+       "--viewer-pause-at",
+       std::to_string(hold_at)},
+      run_log);
   ASSERT_TRUE(run.started());
   ASSERT_TRUE(Eventually([&] { return testing::HttpGet(port, "/").status == 200; }, 60))
-      << ReadFile(dir.path() + "/run.log");
+      << ReadFile(run_log);
 
   const int cdp = FreePort();
   Child browser({chromium, "--headless=new", "--no-sandbox", "--no-first-run",
@@ -273,22 +385,16 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
   std::this_thread::sleep_for(std::chrono::seconds(1));
   EXPECT_EQ(page.State().value("frame", -1), 1) << "a step moved more than one frame";
 
-  // Running, then paused from the page in the middle of the run: the counter stops.
+  // Running until the run holds itself at `hold_at` (--viewer-pause-at): the page shows it paused
+  // there and the counter stays; what the page shows on demand arrives with the paused frame.
   page.Click("resume");
-  const int pause_at =
-      std::getenv("MOSLAM_VIEWER_PAUSE_AT") ? std::atoi(std::getenv("MOSLAM_VIEWER_PAUSE_AT")) : 3;
-  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) >= pause_at; }, 300));
-  page.Click("pause");
-  ASSERT_TRUE(Eventually([&] { return page.State().value("paused", false); }, 10))
+  // Past frame 1, the page has had the resume (the server sends in order), so a pause it shows
+  // from then on is the hold's.
+  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) > 1; }, 60))
       << page.State().dump();
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  const int stopped_at = page.State().value("frame", -1);
-  ASSERT_FALSE(page.State().value("finished", true))
-      << "the run ended before the pause took: " << page.State().dump() << "\n"
-      << ReadFile(dir.path() + "/run.log");
-  std::this_thread::sleep_for(std::chrono::seconds(1));
-  EXPECT_EQ(page.State().value("frame", -1), stopped_at) << "the run went on while paused";
-  CheckOnDemand(page, stopped_at, dir.path() + "/run.log");
+  const int held_at = PausedFrame(page, run_log);
+  ASSERT_EQ(held_at, hold_at) << ReadFile(run_log);
+  CheckOnDemand(page, held_at, run_log);
   if (const char* shot = std::getenv("MOSLAM_VIEWER_SCREENSHOT")) {
     // Closer than the page's default orbit (3.3 m behind the camera), so that the keyframe graph
     // of a small room shows; the page's own camera and controls, from its global scope.
@@ -296,10 +402,26 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
         "camera.position.sub(controls.target).multiplyScalar(0.4).add(controls.target);"
         "controls.update()");
     std::this_thread::sleep_for(std::chrono::seconds(1));  // the page draws the images async
-    const json reply = page.Call("Page.captureScreenshot", {{"format", "png"}});
-    std::ofstream(shot, std::ios::binary)
-        << Base64Decode(reply["result"].value("data", std::string()));
+    Screenshot(page, shot);
   }
+  page.Click("step");
+  ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) == held_at + 1; }, 30))
+      << "held at " << held_at << ": " << page.State().dump();
+
+  // The page's own Pause on a running run: pressed right after Resume, in one go, so that it
+  // reaches the run long before the third of the sequence left is over (paced in real time),
+  // however slowly the page draws. The run stops where the pause found it and stays there.
+  const int statuses = page.State().value("statuses", 0);
+  page.Eval("document.getElementById('resume').click(); document.getElementById('pause').click()");
+  // The server has carried out both once the page has their two statuses.
+  ASSERT_TRUE(Eventually([&] { return page.State().value("statuses", 0) >= statuses + 2; }, 60))
+      << page.State().dump();
+  const int stopped_at = PausedFrame(page, run_log);
+  ASSERT_GE(stopped_at, held_at + 1);
+  std::printf(
+      "held at frame %d by --viewer-pause-at, stepped once, resumed and paused from the "
+      "page at frame %d (of %d)\n",
+      held_at, stopped_at, frames);
   page.Click("step");
   ASSERT_TRUE(Eventually([&] { return page.State().value("frame", -1) == stopped_at + 1; }, 30))
       << "paused at " << stopped_at << ": " << page.State().dump();
@@ -307,7 +429,7 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
 
   // The end: the page's own counts against summary.json.
   ASSERT_TRUE(Eventually([&] { return page.State().value("finished", false); }, 300))
-      << ReadFile(dir.path() + "/run.log");
+      << ReadFile(run_log);
   const json summary = json::parse(ReadFile(run_dir + "/summary.json"), nullptr, false);
   ASSERT_TRUE(summary.is_object());
   const json state = page.State();
@@ -325,16 +447,13 @@ TEST(ViewerBrowser, PageCountsMatchTheRunAndPauseStepWork) {
   std::printf("at the end: %d keyframes, %d loops marked on the page (summary.json: %d closed)\n",
               state.value("keyframes", 0), state.value("loops", 0),
               summary.value("loops_closed", 0));
-  if (const char* shot = std::getenv("MOSLAM_VIEWER_SCREENSHOT_END")) {
-    const json reply = page.Call("Page.captureScreenshot", {{"format", "png"}});
-    std::ofstream(shot, std::ios::binary)
-        << Base64Decode(reply["result"].value("data", std::string()));
-  }
+  if (const char* shot = std::getenv("MOSLAM_VIEWER_SCREENSHOT_END")) Screenshot(page, shot);
   // Each closed loop was announced on the page as it happened.
   EXPECT_EQ(state.value("loopNotices", -1), state.value("loops", -2));
   // The run has ended and the page stays until Ctrl-C, which ends moslam with status 0.
   run.Signal(SIGINT);
-  EXPECT_EQ(run.Wait(), 0) << ReadFile(dir.path() + "/run.log");
+  EXPECT_EQ(run.Wait(), 0) << ReadFile(run_log);
+  CheckViewOfTheFolder(page, moslam, run_dir, dir.path() + "/view.log", state);
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ void AppendPosition(const geometry::SE3& T_world_cam, std::vector<float>* out) {
 }  // namespace
 
 LiveViewer::LiveViewer(const ViewerOptions& options, const std::atomic<int>* stop)
-    : stop_(stop), paused_(options.start_paused) {
+    : stop_(stop), pause_at_(options.pause_at), paused_(options.start_paused) {
   options.Check();
   server_ =
       std::make_unique<Server>(options.server, [this](const nlohmann::json& c) { OnCommand(c); });
@@ -108,6 +108,7 @@ void LiveViewer::OnFrame(const runner::FrameRecord& record, const slam::FrameInp
     first_pose_.emplace(record.timestamp, *snapshot.T_world_cam);
   snapshot.first_pose = first_pose_;
   if (snapshot.T_world_cam) AppendPosition(*snapshot.T_world_cam, &pending_trajectory_);
+  PauseAtFrame(static_cast<size_t>(record.index));
   // A paused run shows the frame it stopped at, whatever the server has not sent yet, also to a
   // browser that connects later (the server keeps the last picture for it).
   if ((watched && slot_.Empty()) || paused()) {
@@ -115,6 +116,18 @@ void LiveViewer::OnFrame(const runner::FrameRecord& record, const slam::FrameInp
     Publish(std::move(snapshot), false);
   }
   WaitWhilePaused(input, tracker);
+}
+
+void LiveViewer::PauseAtFrame(size_t index) {
+  if (!pause_at_ || index < *pause_at_) return;
+  pause_at_.reset();  // once: a step or a resume goes on from here
+  {
+    std::lock_guard<std::mutex> lock(control_mutex_);
+    paused_ = true;
+  }
+  spdlog::info("viewer: paused at frame {} (--viewer-pause-at); resume or step on the page", index);
+  // Every page shows Resume then, as after its own Pause.
+  server_->Post([this] { BroadcastStatus(); });
 }
 
 void LiveViewer::Fill(const slam::FrameInput& input, runner::Tracker& tracker, Snapshot* snapshot) {

@@ -37,6 +37,11 @@ namespace moslam::viewer {
 struct ViewerOptions {
   ServerOptions server;
   bool start_paused = false;  // the run stops after its first frame until the page resumes/steps
+  // The run stops at the first frame whose index (FrameRecord::index) is at least this, as if the
+  // page had pressed Pause as it was shown (moslam run --viewer-pause-at): a frame to look at,
+  // and a pause that a test can rely on whatever the machine's load, since the run cannot end
+  // before it, unlike a click that may arrive late.
+  std::optional<size_t> pause_at;
   void Check() const { server.Check(); }
 };
 
@@ -64,6 +69,8 @@ class LiveViewer : public runner::FrameObserver {
 
  private:
   nlohmann::json Numbers(const runner::FrameRecord& record);
+  // Pauses the run at ViewerOptions::pause_at once `index` reaches it (tracking thread).
+  void PauseAtFrame(size_t index);
   // The map's copy (as the page asks for it) and the frame's images into *snapshot.
   void Fill(const slam::FrameInput& input, runner::Tracker& tracker, Snapshot* snapshot);
   void Publish(Snapshot snapshot, bool replace);
@@ -85,7 +92,8 @@ class LiveViewer : public runner::FrameObserver {
   nlohmann::json last_numbers_;  // of the last frame, to publish it again
   std::optional<geometry::SE3> last_T_world_cam_;
   std::optional<std::pair<double, geometry::SE3>> first_pose_;  // of the first tracked frame
-  bool watching_ = false;  // what the tracker was last told (Tracker::Watch)
+  bool watching_ = false;           // what the tracker was last told (Tracker::Watch)
+  std::optional<size_t> pause_at_;  // ViewerOptions::pause_at, until it is reached
   // Server thread only.
   RunPicture picture_;
   eval::Trajectory ground_truth_;

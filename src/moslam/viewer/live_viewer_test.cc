@@ -240,6 +240,42 @@ TEST(LiveViewer, PauseStepAndResumeHoldTheRunLoop) {
   EXPECT_FALSE(viewer.paused());
 }
 
+// --viewer-pause-at: the run stops at the given frame by itself, so a page (or a test) that looks
+// late still finds the run paused there rather than ended; every page hears of the pause, and a
+// step or a resume goes on from there without stopping at that frame again.
+TEST(LiveViewer, PauseAtAFrameHoldsTheRunThere) {
+  ViewerOptions options = AnyPort();
+  options.pause_at = 5;
+  LiveViewer viewer(options, nullptr);
+  FakeTracker tracker(10, 1, 10);
+  WsClient client(WsUrl(viewer));
+  ASSERT_TRUE(client.WaitOpen());
+  ASSERT_TRUE(client.WaitMessages(1));
+  const slam::FrameInput input = Input();
+  std::atomic<int> done{0};
+  std::thread loop([&] {
+    for (int i = 0; i < 10; ++i) {
+      viewer.OnFrame(Record(i), input, tracker);
+      ++done;
+    }
+  });
+  ASSERT_TRUE(client.WaitForMessage(IsFrame(5)));  // the paused frame is always sent
+  ASSERT_TRUE(client.WaitForMessage([](const WsClient::Message& m) {
+    const auto j = nlohmann::json::parse(m.payload, nullptr, false);
+    return !m.binary && j.is_object() && j.value("paused", false);
+  }));
+  EXPECT_TRUE(viewer.paused());
+  EXPECT_EQ(done.load(), 5);  // frames 0-4 went through, frame 5 waits
+  client.Send("{\"cmd\": \"step\"}");
+  ASSERT_TRUE(client.WaitForMessage(IsFrame(6)));
+  EXPECT_TRUE(testing::PollUntil([&] { return done.load() == 6; }));
+  EXPECT_TRUE(viewer.paused());
+  client.Send("{\"cmd\": \"resume\"}");
+  loop.join();
+  EXPECT_EQ(done.load(), 10);
+  EXPECT_FALSE(viewer.paused());
+}
+
 TEST(LiveViewer, AStopSignalEndsAPause) {
   std::atomic<int> stop{0};
   LiveViewer viewer(AnyPort(/*paused=*/true), &stop);

@@ -1,14 +1,21 @@
 #include "moslam/viewer/run_dir.h"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <utility>
+#include <vector>
 
 #include <spdlog/spdlog.h>
 
 #include "moslam/eval/trajectory_io.h"
 #include "moslam/io/dataset.h"
+#include "moslam/map/keyframe_graph.h"
 #include "moslam/map/map.h"
 #include "moslam/mapio/map_file.h"
+#include "moslam/runner/keyframe_graph.h"
 #include "moslam/runner/outputs.h"
 #include "moslam/util/error.h"
 
@@ -64,16 +71,88 @@ bool LoadFinalMap(const fs::path& run_dir, RunView* view) {
         v.points.insert(v.points.end(), {p.x(), p.y(), p.z()});
         v.point_states.push_back(static_cast<uint8_t>(slam::ViewPointState::kMap));
       }
-      for (const auto& [id, keyframe] : map.keyframes())
-        v.keyframes.push_back(keyframe->T_world_cam());
+      // The keyframes and their whole graph, as the live page's final picture has them.
+      map::IndexedKeyFrameGraph graph =
+          map::IndexKeyFrameGraph(map, /*with_graph=*/true, slam::kViewCovisibilityMinWeight);
+      v.keyframes = std::move(graph.poses);
+      v.loops = std::move(graph.loops);
+      v.covisibility = std::move(graph.covisibility);
+      v.spanning_tree = std::move(graph.spanning_tree);
+      v.has_graph = true;
       view->snapshot.view = std::move(v);
       view->map_path = path;
+      view->graph_from = path;
       return true;
     } catch (const InputError& e) {
       spdlog::warn("view: {} not drawn: {}", path, e.what());
     }
   }
   return false;
+}
+
+// Whether the keyframes of a graph file are those of KeyFrameTrajectory.txt (6 decimals there).
+bool SameKeyFrames(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t k = 0; k < a.size(); ++k) {
+    if (std::abs(a[k] - b[k]) > 2e-6) return false;
+  }
+  return true;
+}
+
+// The closed loops of summary.json (the timestamps of each loop's two keyframes) by index into
+// `timestamps`, for a folder written before keyframe_graph.json was; a loop whose keyframe is not
+// found is left out.
+std::vector<uint32_t> LoopsFromSummary(const nlohmann::json& summary,
+                                       const std::vector<double>& timestamps) {
+  const auto find = [&timestamps](double t) -> std::optional<uint32_t> {
+    for (size_t k = 0; k < timestamps.size(); ++k) {
+      if (std::abs(timestamps[k] - t) <= 2e-6) return static_cast<uint32_t>(k);
+    }
+    return std::nullopt;
+  };
+  std::vector<std::pair<uint32_t, uint32_t>> loops;  // (current, loop), as the view orders them
+  const nlohmann::json none = nlohmann::json::array();
+  const nlohmann::json& list = summary.contains("loops") ? summary["loops"] : none;
+  for (const nlohmann::json& loop : list) {
+    if (!loop.is_object()) continue;
+    const auto current = find(loop.value("time", -1.0));
+    const auto other = find(loop.value("loop_time", -1.0));
+    if (current && other) loops.emplace_back(*current, *other);
+  }
+  std::sort(loops.begin(), loops.end());
+  std::vector<uint32_t> out;
+  for (const auto& [current, other] : loops) out.insert(out.end(), {other, current});
+  return out;
+}
+
+// Without a map file: the keyframes of KeyFrameTrajectory.txt and their graph from
+// keyframe_graph.json (`moslam run` writes it), or only the loops of summary.json for an older
+// folder. A graph whose keyframes are not those is left out (a warning).
+void LoadKeyFrames(const fs::path& dir, const nlohmann::json& summary, RunView* view) {
+  slam::SystemView v;
+  eval::Trajectory keyframes;
+  if (fs::exists(dir / "KeyFrameTrajectory.txt")) {
+    keyframes = eval::ReadTrajectory((dir / "KeyFrameTrajectory.txt").string());
+    v.keyframes = keyframes.poses;
+  }
+  const fs::path graph_path = dir / "keyframe_graph.json";
+  if (fs::exists(graph_path)) {
+    runner::KeyFrameGraph graph = runner::ReadKeyFrameGraph(graph_path.string());
+    if (SameKeyFrames(graph.timestamps, keyframes.timestamps)) {
+      v.loops = std::move(graph.loops);
+      v.covisibility = std::move(graph.covisibility);
+      v.spanning_tree = std::move(graph.spanning_tree);
+      v.has_graph = true;
+      view->graph_from = graph_path.string();
+    } else {
+      spdlog::warn("view: {} is not of the keyframes of KeyFrameTrajectory.txt: not drawn",
+                   graph_path.string());
+    }
+  } else {
+    v.loops = LoopsFromSummary(summary, keyframes.timestamps);
+    if (!v.loops.empty()) view->graph_from = "summary.json (loops only)";
+  }
+  view->snapshot.view = std::move(v);
 }
 
 }  // namespace
@@ -86,12 +165,7 @@ RunView LoadRunView(const std::string& run_dir) {
   RunView view;
   AppendPositions(camera, &view.picture.trajectory);
   view.picture.ground_truth = GroundTruth(summary, camera);
-  if (!LoadFinalMap(dir, &view)) {
-    const fs::path keyframes = dir / "KeyFrameTrajectory.txt";
-    slam::SystemView v;
-    if (fs::exists(keyframes)) v.keyframes = eval::ReadTrajectory(keyframes.string()).poses;
-    view.snapshot.view = std::move(v);
-  }
+  if (!LoadFinalMap(dir, &view)) LoadKeyFrames(dir, summary, &view);
   if (!camera.empty()) view.snapshot.T_world_cam = camera.poses.back();
   view.snapshot.numbers = {
       {"type", "frame"},

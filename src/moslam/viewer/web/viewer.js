@@ -17,6 +17,8 @@ const NOTICE_MS = 6000;  // how long a closed loop's notice stays
 
 const state = window.moslam = {
   connected: false, messages: 0, paused: false, finished: false, replay: false,
+  // Status messages (pause state, toggles) received: one per command the server has carried out.
+  statuses: 0,
   frame: -1, frames: 0, keyframes: 0, mapPoints: 0, erasedPoints: 0, keypoints: 0,
   trajectory: 0, groundTruth: 0, webgl: true, numbers: {}, error: '',
   // Sent on demand: what the last message held, and how many messages held it.
@@ -362,6 +364,7 @@ function connect() {
     if (typeof event.data === 'string') {
       const status = JSON.parse(event.data);
       if (status.type === 'status') {
+        state.statuses += 1;
         state.paused = status.paused;
         // The toggles hold for every browser: another page may have changed them.
         state.graphOn = document.getElementById('graph').checked = !!status.graph;
