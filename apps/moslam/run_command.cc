@@ -66,6 +66,7 @@ struct RunArgs {
   bool no_moving_check = false;
   bool no_static_scores = false;
   bool no_moving_regions = false;
+  bool no_propagation_depth_check = false;
   bool no_completion_planes = false;
   bool no_pose_consensus = false;
   bool young_points = false;
@@ -178,6 +179,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.moving_keypoint_check = !args.no_moving_check;
   options.static_scores = !args.no_static_scores;
   options.moving_regions = !args.no_moving_regions;
+  options.mask_propagation_depth_check = !args.no_propagation_depth_check;
   options.completion_structure = !args.no_completion_planes;
   options.pose_consensus = !args.no_pose_consensus;
   options.young_points = args.young_points;
@@ -522,6 +524,9 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--no-completion-planes", args->no_completion_planes,
                     "RGB-D: let the mask completion grow onto the large planes of the depth image "
                     "(floor, walls) too, bounded only by --mask-completion (ablations)");
+  command->add_flag("--no-propagation-depth-check", args->no_propagation_depth_check,
+                    "RGB-D: keep every carried mask pixel, also where the new depth shows the "
+                    "body has left it (ablations)");
   command->add_flag("--no-moving-regions", args->no_moving_regions,
                     "Do not turn clusters of keypoints found moving into mask regions carried "
                     "into the next frames (ablations)");

@@ -46,15 +46,19 @@ struct Bounds {
   cv::Rect rect() const { return u1 < 0 ? cv::Rect() : cv::Rect(u0, v0, u1 - u0 + 1, v1 - v0 + 1); }
 };
 
-void Splat(cv::Mat* out, double u, double v, uint8_t value, Bounds* bounds) {
+// `z_out` (or null): the depth of what landed, the nearest kept; z 0 (no depth) never replaces.
+void Splat(cv::Mat* out, double u, double v, uint8_t value, Bounds* bounds, cv::Mat* z_out,
+           float z) {
   // The 2x2 pixels around (u, v): a surface seen up to twice as close leaves no cracks.
   const int u0 = static_cast<int>(std::floor(u)), v0 = static_cast<int>(std::floor(v));
   for (int y = v0; y <= v0 + 1; ++y) {
     if (y < 0 || y >= out->rows) continue;
     auto* row = out->ptr<uint8_t>(y);
+    float* z_row = z_out != nullptr ? z_out->ptr<float>(y) : nullptr;
     for (int x = u0; x <= u0 + 1; ++x) {
       if (x < 0 || x >= out->cols) continue;
       if (row[x] == 0 || value < row[x]) row[x] = value;
+      if (z_row != nullptr && z > 0.0f && (z_row[x] == 0.0f || z < z_row[x])) z_row[x] = z;
       bounds->u0 = std::min(bounds->u0, x), bounds->u1 = std::max(bounds->u1, x);
       bounds->v0 = std::min(bounds->v0, y), bounds->v1 = std::max(bounds->v1, y);
     }
@@ -64,12 +68,14 @@ void Splat(cv::Mat* out, double u, double v, uint8_t value, Bounds* bounds) {
 }  // namespace
 
 cv::Mat WarpMask(const cv::Mat& values, const cv::Mat& depth, const camera::PinholeCamera& camera,
-                 const geometry::SE3& T_to_from, const cv::Rect& source, cv::Rect* written) {
+                 const geometry::SE3& T_to_from, const cv::Rect& source, cv::Rect* written,
+                 cv::Mat* warped_depth) {
   MOSLAM_CHECK(values.type() == CV_8UC1);
   MOSLAM_CHECK(depth.empty() || (depth.type() == CV_32FC1 && depth.size() == values.size()));
   const cv::Rect area = source.empty() ? cv::Rect(0, 0, values.cols, values.rows)
                                        : source & cv::Rect(0, 0, values.cols, values.rows);
   cv::Mat out = cv::Mat::zeros(values.size(), CV_8UC1);
+  if (warped_depth != nullptr) *warped_depth = cv::Mat::zeros(values.size(), CV_32FC1);
   Bounds bounds;
   const double fx = camera.fx(), fy = camera.fy(), cx = camera.cx(), cy = camera.cy();
   const Eigen::Matrix3d R = T_to_from.rotation().toRotationMatrix();
@@ -85,10 +91,12 @@ cv::Mat WarpMask(const cv::Mat& values, const cv::Mat& depth, const camera::Pinh
       const Eigen::Vector3d ray(ray_x[u], ray_y, 1.0);
       const float z = d ? d[u] : 0.0f;
       // With depth: the point; without: the direction only (rotation, no translation).
-      const Eigen::Vector3d p = (z > 0.0f && std::isfinite(z)) ? Eigen::Vector3d(R * (z * ray) + t)
-                                                               : Eigen::Vector3d(R * ray);
+      const bool with_depth = z > 0.0f && std::isfinite(z);
+      const Eigen::Vector3d p =
+          with_depth ? Eigen::Vector3d(R * (z * ray) + t) : Eigen::Vector3d(R * ray);
       if (p.z() <= 1e-6) continue;
-      Splat(&out, fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy, src[u], &bounds);
+      Splat(&out, fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy, src[u], &bounds, warped_depth,
+            with_depth ? static_cast<float>(p.z()) : 0.0f);
     }
   }
   if (written != nullptr) *written = bounds.rect();

@@ -37,9 +37,12 @@ std::vector<uint8_t> KeypointsNearMask(const std::vector<cv::KeyPoint>& keypoint
 // `source`, when not empty, is where `values` may be non-zero (the caller knows it, e.g. from
 // the last frame): only it is read. `written`, when given, receives the bounding box of the
 // pixels the warp wrote (empty when none), so that the caller can work on that part alone.
+// `warped_depth`, when given, receives (CV_32FC1) the depth in the target camera of the point
+// that landed on each written pixel (the nearest where several did; 0 where none, or where the
+// pixel came without depth): where the target's own depth is farther, what was carried has left.
 cv::Mat WarpMask(const cv::Mat& values, const cv::Mat& depth, const camera::PinholeCamera& camera,
                  const geometry::SE3& T_to_from, const cv::Rect& source = cv::Rect(),
-                 cv::Rect* written = nullptr);
+                 cv::Rect* written = nullptr, cv::Mat* warped_depth = nullptr);
 
 // The mask work at a coarser scale (SystemOptions::mask_work_scale): propagation, structure
 // planes and completion cost in proportion to the pixels they touch, and a mask carried or grown

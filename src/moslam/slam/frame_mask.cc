@@ -30,6 +30,7 @@ FrameMask::FrameMask(const camera::PinholeCamera& camera, const FrameMaskOptions
     // The growth per frame stays the same in the image (2 px: 1 work pixel at scale 2).
     const int s = options_.work_scale;
     propagation.grow_px = (propagation.grow_px + s - 1) / s;
+    propagation.depth_check = options_.propagation_depth_check;
     propagator_ = std::make_unique<MaskPropagator>(work_camera_, propagation);
   }
 }
@@ -44,7 +45,7 @@ cv::Mat FrameMask::MaskFor(const cv::Mat& network, const cv::Mat& depth, const c
   work_depth_ = depth.empty() ? cv::Mat() : feature::DownsampleDepth(depth, s);
   const cv::Size work_size((size.width + s - 1) / s, (size.height + s - 1) / s);
   cv::Mat mask = network.empty() ? cv::Mat() : feature::DownsampleMask(network, s);
-  if (propagator_) mask = propagator_->MaskFor(mask, work_size, T_cur_last);
+  if (propagator_) mask = propagator_->MaskFor(mask, work_size, T_cur_last, work_depth_);
   if (grow && !mask.empty() && cv::countNonZero(mask) > 0) {
     feature::MaskCompletionOptions completion;
     completion.max_grow_px = (options_.completion_px + s - 1) / s;

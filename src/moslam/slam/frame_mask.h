@@ -28,6 +28,9 @@ namespace moslam::slam {
 struct FrameMaskOptions {
   // Frames a mask is carried after its last sight (0: no carrying; MaskPropagationOptions).
   int propagation_frames = 3;
+  // RGB-D: carried pixels are dropped where the new depth shows the body has left them
+  // (MaskPropagationOptions::depth_check).
+  bool propagation_depth_check = true;
   // Farthest a mask grows over depth-connected pixels, in full-size pixels (0: no growth).
   int completion_px = 400;
   // Whether the growth stays off the frame's large planes.

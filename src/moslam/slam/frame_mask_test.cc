@@ -49,7 +49,7 @@ TEST(FrameMask, ScaleOneIsThePropagatorAndTheCompletionAtFullSize) {
     const cv::Mat network = frame == 1 ? cv::Mat() : scene.network;  // frame 1: missed
     const cv::Mat got = masks.MaskFor(
         network, scene.depth, network.empty() ? scene.depth.size() : network.size(), motion);
-    cv::Mat expected = propagator.MaskFor(network, scene.depth.size(), motion);
+    cv::Mat expected = propagator.MaskFor(network, scene.depth.size(), motion, scene.depth);
     const auto planes = feature::StructurePlanes::Find(scene.depth, TestCamera(), expected,
                                                        feature::StructurePlaneOptions{});
     feature::MaskCompletionOptions completion;
@@ -92,7 +92,10 @@ TEST(FrameMask, HalfScaleCarriesTheMaskWithTheMotion) {
   // The camera moved 0.08 m to the right: the body (2 m) moves 20 px left, the carried mask
   // grows 2 px a frame.
   const geometry::SE3 T_cur_last(Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.08, 0.0, 0.0));
-  const cv::Mat carried = masks.MaskFor(cv::Mat(), scene.depth, scene.depth.size(), T_cur_last);
+  // The new frame's depth has the body there too (what lies around it does not matter here).
+  cv::Mat moved = Scene().depth;
+  moved(cv::Rect(230, 60, 160, 340)).setTo(2.0f);
+  const cv::Mat carried = masks.MaskFor(cv::Mat(), moved, moved.size(), T_cur_last);
   ASSERT_FALSE(carried.empty());
   const cv::Rect box = cv::boundingRect(carried);
   EXPECT_NEAR(box.x, 230 - 2, 2);

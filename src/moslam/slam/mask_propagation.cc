@@ -14,6 +14,9 @@ void MaskPropagationOptions::Check() const {
     throw InputError("MaskPropagationOptions.max_age must be in 1..250 frames");
   }
   if (grow_px < 0) throw InputError("MaskPropagationOptions.grow_px must be >= 0");
+  if (!(depth_gap_m >= 0.0) || !(depth_gap_fraction >= 0.0)) {
+    throw InputError("MaskPropagationOptions.depth_gap_m and depth_gap_fraction must be >= 0");
+  }
 }
 
 MaskPropagator::MaskPropagator(const camera::PinholeCamera& camera,
@@ -23,17 +26,23 @@ MaskPropagator::MaskPropagator(const camera::PinholeCamera& camera,
 }
 
 cv::Mat MaskPropagator::MaskFor(const cv::Mat& network, const cv::Size& size,
-                                const std::optional<geometry::SE3>& T_cur_last) {
+                                const std::optional<geometry::SE3>& T_cur_last,
+                                const cv::Mat& depth) {
   MOSLAM_CHECK(network.empty() || (network.type() == CV_8UC1 && network.size() == size));
+  MOSLAM_CHECK(depth.empty() || (depth.type() == CV_32FC1 && depth.size() == size));
   cv::Mat ages = cv::Mat::zeros(size, CV_8UC1);
   if (!last_ages_.empty() && last_ages_.size() == size && !last_bounds_.empty()) {
     // Only the carried mask's bounding box (grown by the growth) is worked on: a body covers a
     // fifth of the view, and the fade, growth and copy of the whole image cost as much as the
     // warp itself.
     cv::Rect bounds = last_bounds_;
-    const cv::Mat carried = T_cur_last ? feature::WarpMask(last_ages_, last_depth_, camera_,
-                                                           *T_cur_last, last_bounds_, &bounds)
-                                       : last_ages_;
+    const bool check = options_.depth_check && T_cur_last && !depth.empty() && !last_depth_.empty();
+    cv::Mat carried_depth;
+    cv::Mat carried =
+        T_cur_last ? feature::WarpMask(last_ages_, last_depth_, camera_, *T_cur_last, last_bounds_,
+                                       &bounds, check ? &carried_depth : nullptr)
+                   : last_ages_;
+    if (check) DropWhereBehind(depth, carried_depth, bounds, &carried);
     const cv::Rect roi = (bounds + cv::Point(-options_.grow_px, -options_.grow_px) +
                           cv::Size(2 * options_.grow_px, 2 * options_.grow_px)) &
                          cv::Rect(0, 0, size.width, size.height);
@@ -81,6 +90,23 @@ void MaskPropagator::CarryInto(const cv::Mat& carried, cv::Mat ages) const {
     auto* a = ages.ptr<uint8_t>(v);
     for (int u = 0; u < size.width; ++u) {
       if (in[u] != 0) a[u] = static_cast<uint8_t>(255 - in[u]);
+    }
+  }
+}
+
+void MaskPropagator::DropWhereBehind(const cv::Mat& depth, const cv::Mat& carried_depth,
+                                     const cv::Rect& area, cv::Mat* carried) const {
+  const cv::Rect roi = area & cv::Rect(0, 0, depth.cols, depth.rows);
+  const auto gap = static_cast<float>(options_.depth_gap_m);
+  const auto fraction = static_cast<float>(1.0 + options_.depth_gap_fraction);
+  for (int v = roi.y; v < roi.y + roi.height; ++v) {
+    const float* now = depth.ptr<float>(v);
+    const float* was = carried_depth.ptr<float>(v);
+    auto* c = carried->ptr<uint8_t>(v);
+    for (int u = roi.x; u < roi.x + roi.width; ++u) {
+      // Both depths known, and the new one behind: the body has left this pixel. NaN compares
+      // false, so an invalid depth keeps the pixel.
+      if (c[u] != 0 && was[u] > 0.0f && now[u] > 0.0f && now[u] > fraction * was[u] + gap) c[u] = 0;
     }
   }
 }

@@ -64,9 +64,51 @@ TEST(MaskPropagator, UnitesTheNetworkWithTheCarriedMaskAndGrowsIt) {
   EXPECT_TRUE(propagator.MaskFor(cv::Mat(), size, geometry::SE3()).empty());
 }
 
+// A body 2 m away before a wall at 4 m walks 60 px to the left while the camera stands still:
+// the carried pixels where the wall now shows through are dropped (they would seed the mask's
+// completion on the wall), those where the body still is are kept; the camera's own motion,
+// with a static scene, drops nothing.
+TEST(MaskPropagator, DropsCarriedPixelsWhereTheDepthShowsTheBodyLeft) {
+  MaskPropagationOptions options;
+  options.grow_px = 0;
+  const cv::Size size(640, 480);
+  const auto scene = [](int body_x) {
+    cv::Mat depth(480, 640, CV_32FC1, cv::Scalar(4.0f));
+    depth(cv::Rect(body_x, 200, 100, 200)).setTo(2.0f);
+    return depth;
+  };
+  for (const bool check : {true, false}) {
+    options.depth_check = check;
+    MaskPropagator propagator(TestCamera(), options);
+    propagator.MaskFor(Box(300, 200, 100, 200), size, std::nullopt, scene(300));
+    propagator.Commit(scene(300));
+    const cv::Mat mask = propagator.MaskFor(cv::Mat(), size, geometry::SE3(), scene(240));
+    ASSERT_FALSE(mask.empty());
+    EXPECT_EQ(mask.at<uint8_t>(300, 320), 255) << "the body is still here";
+    EXPECT_EQ(mask.at<uint8_t>(300, 380), check ? 0 : 255) << "the wall shows through here";
+    // (The warp splats each pixel on 2x2: unchecked, the box gains a column and a row.)
+    EXPECT_EQ(cv::countNonZero(mask), check ? 40 * 200 : 101 * 201);
+  }
+  // The camera moves 0.1 m to the right, nothing in the scene does: the carried mask lands on
+  // the body, where the depths agree, and none of it is dropped.
+  options.depth_check = true;
+  MaskPropagator propagator(TestCamera(), options);
+  const geometry::SE3 T_cur_last(Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.1, 0.0, 0.0));
+  propagator.MaskFor(Box(300, 200, 100, 200), size, std::nullopt, scene(300));
+  propagator.Commit(scene(300));
+  const cv::Mat mask = propagator.MaskFor(cv::Mat(), size, T_cur_last, scene(275));
+  ASSERT_FALSE(mask.empty());
+  // Exactly the body: the splat's extra column and row fall on the wall, 2 m behind.
+  EXPECT_EQ(cv::countNonZero(mask), 100 * 200);
+  EXPECT_NEAR(cv::boundingRect(mask).x, 275, 1);
+}
+
 TEST(MaskPropagator, OptionsAreChecked) {
   MaskPropagationOptions options;
   options.max_age = 0;
+  EXPECT_THROW(MaskPropagator(TestCamera(), options), InputError);
+  options = MaskPropagationOptions();
+  options.depth_gap_m = -0.1;
   EXPECT_THROW(MaskPropagator(TestCamera(), options), InputError);
 }
 

@@ -392,6 +392,7 @@ class System::Impl : public KeyFrameSink {
   static FrameMaskOptions FrameMaskOpts(const SystemOptions& o) {
     FrameMaskOptions f;
     f.propagation_frames = o.mask_propagation_frames;
+    f.propagation_depth_check = o.mask_propagation_depth_check;
     f.completion_px = o.mask_completion_px;
     f.completion_structure = o.completion_structure;
     f.work_scale = o.mask_work_scale;

@@ -90,6 +90,9 @@ struct SystemOptions {
   // masks carried into the next frames with the predicted motion (slam/mask_propagation.h),
   // so a frame the network missed, or did not run on, still has one; 0 frames: off;
   int mask_propagation_frames = 3;
+  // ... RGB-D: dropping the carried pixels behind which the new depth shows the body has left
+  // (MaskPropagationOptions::depth_check; moslam run --no-propagation-depth-check);
+  bool mask_propagation_depth_check = true;
   // RGB-D: masks grown over the depth-connected surface they cover, up to this many pixels
   // (feature::CompleteMaskByDepth), so a body the network saw only in part (its head, its legs)
   // is masked whole; 0: off ...
