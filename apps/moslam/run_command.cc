@@ -2,6 +2,7 @@
 // a summary (runner/outputs.h). The loop itself is moslam::runner (RunSequence, tested with a fake
 // tracker); this file maps options and adapts slam::System to runner::Tracker.
 #include <atomic>
+#include <charconv>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -53,6 +54,8 @@ struct RunArgs {
   size_t queue = 4;
   bool realtime = false;
   bool deterministic = false;
+  int deterministic_mapping_frames = slam::SystemOptions{}.deterministic_mapping_frames;
+  double deterministic_mapping_ms = slam::SystemOptions{}.deterministic_mapping_ms_per_observation;
   bool monocular = false;
   bool quiet = false;
   bool no_loop_closing = false;
@@ -75,7 +78,7 @@ struct RunArgs {
   int mask_propagation = slam::SystemOptions{}.mask_propagation_frames;
   int mask_completion = slam::SystemOptions{}.mask_completion_px;
   int mask_work_scale = slam::SystemOptions{}.mask_work_scale;
-  int segment_every = 1;
+  std::string segment_every = "1";  // K or "auto"
   std::string mask_damage;
   // Maps that last (issue 27, docs/MAP_FORMAT.md).
   std::string save_map;
@@ -161,6 +164,25 @@ void SetMapOptions(const RunArgs& args, slam::SystemOptions* options) {
 }
 #endif
 
+// --segment-every: K >= 1, or "auto" (RunOptions::segment_every 0), which times decide and
+// --deterministic therefore refuses.
+int ParseSegmentEvery(const std::string& text, bool deterministic) {
+  if (text == "auto") {
+    if (deterministic) {
+      ThrowInput(
+          "--segment-every auto picks the frames from measured times, which --deterministic "
+          "cannot repeat; give a number");
+    }
+    return 0;
+  }
+  int every = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), every);
+  if (error != std::errc() || end != text.data() + text.size() || every < 1) {
+    ThrowInput("--segment-every: expected a whole number >= 1 or auto, got '{}'", text);
+  }
+  return every;
+}
+
 std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings,
                                              io::SensorType sensor, const RunArgs& args) {
 #if MOSLAM_HAVE_SLAM
@@ -168,6 +190,8 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.sensor = sensor;
   options.settings = settings;
   options.deterministic = args.deterministic;
+  options.deterministic_mapping_frames = args.deterministic_mapping_frames;
+  options.deterministic_mapping_ms_per_observation = args.deterministic_mapping_ms;
   options.vocabulary_path = ResolveVocabulary(args.vocabulary);
   options.loop_closing = !args.no_loop_closing;
   options.loop_verification = !args.no_loop_verification;
@@ -221,6 +245,8 @@ runner::MaskOptions MakeMaskOptions(const RunArgs& args) {
   options.movable = args.movable;
   options.dilate_px = args.mask_dilate;
   options.model_card = args.model_card;
+  // libtorch's results depend on its thread count (runner::MaskOptions::network_threads).
+  if (args.deterministic) options.network_threads = 1;
   if (!args.crf.empty()) {
     options.crf = semantic::ParseCrfMode(args.crf);
     if (!options.crf) ThrowInput("--crf: '{}' is none of none, c, d, cd", args.crf);
@@ -327,7 +353,7 @@ void Run(const RunArgs& args) {
     options.skip = runner::ParseFrameRange(args.skip_frames, "--skip-frames");
   }
   options.realtime = args.realtime;
-  options.segment_every = args.segment_every;
+  options.segment_every = ParseSegmentEvery(args.segment_every, args.deterministic);
   options.progress = !args.quiet;
   options.queue_capacity = args.queue;
   // RGB-D colour images go to the tracker in colour, converted to grey by Camera.RGB as ORB-SLAM2
@@ -345,7 +371,10 @@ void Run(const RunArgs& args) {
   description.settings_path = args.settings;
   description.settings = settings;
   description.mask_source = masks->Describe();
+  description.segment_every = args.segment_every;
   description.deterministic = args.deterministic;
+  description.deterministic_mapping_frames = args.deterministic_mapping_frames;
+  description.deterministic_mapping_ms = args.deterministic_mapping_ms;
   description.realtime = args.realtime;
   spdlog::info("{}: {} frames ({}), masks: {}; OpenBLAS kernels: {}", sequence.root,
                sequence.size(), io::ToString(sequence.sensor), description.mask_source,
@@ -491,7 +520,23 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--realtime", args->realtime,
                     "Pace frames by their timestamps instead of running as fast as possible");
   command->add_flag("--deterministic", args->deterministic,
-                    "Fixed seeds, local mapping synchronous in the tracking thread");
+                    "Fixed seeds, local mapping synchronous in the tracking thread, the network on "
+                    "one libtorch thread whatever its card says");
+  command
+      ->add_option("--deterministic-mapping-frames", args->deterministic_mapping_frames,
+                   "With --deterministic: tracked frames local mapping takes per keyframe, as "
+                   "its thread would (keyframes wait in a queue on that clock; tracking adds one "
+                   "only when it must while mapping is busy); 0: by the size of its last local "
+                   "bundle adjustment; 1: each keyframe mapped at once")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      ->add_option("--deterministic-mapping-ms", args->deterministic_mapping_ms,
+                   "With --deterministic and --deterministic-mapping-frames 0: milliseconds of "
+                   "mapping per observation of the last local bundle adjustment, turned into "
+                   "frames at the settings' Camera.fps")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   command->add_flag("--monocular", args->monocular,
                     "Monocular SLAM on the left / colour images only, ignoring right images and "
                     "depth (a KITTI folder without image_1 is monocular anyway)");
@@ -567,8 +612,9 @@ void AddRunCommand(CLI::App& app) {
   command
       ->add_option("--segment-every", args->segment_every,
                    "Run the mask source on every K-th frame only; the others get the carried "
-                   "mask (needs --mask-propagation > 0)")
-      ->check(CLI::PositiveNumber)
+                   "mask (needs --mask-propagation > 0). auto: the smallest K at which the "
+                   "source keeps up with tracking, from the times measured as the run goes "
+                   "(not with --deterministic)")
       ->capture_default_str();
   command->add_option("--mask-damage", args->mask_damage,
                       "Damage the masks for ablations: miss=P,border=PX,erode=PX,holes=P,"

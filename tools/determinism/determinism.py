@@ -3,7 +3,10 @@
 and with other thread counts for the parts that have threads of their own: libtorch's intra-op
 threads (the model card's `threads`), the CRF's (`crf.num_threads`), OpenMP's (OMP_NUM_THREADS)
 and OpenBLAS's (OPENBLAS_NUM_THREADS). The weak person network and the depth CRF make the masks,
-so every threaded part of the pipeline is in the loop.
+so every threaded part of the pipeline is in the loop. libtorch's results depend on its thread
+count (the person network's mask differed by a pixel between 1 and 2 threads on an AMD EPYC with
+AVX2, 2026-12-07), so --deterministic runs the network on one thread whatever the card says; the
+variants with the card at 2 threads check that it does.
 
     /usr/bin/python3 tools/determinism/determinism.py --moslam build/apps/moslam/moslam [--work DIR]
 

@@ -32,6 +32,9 @@ struct LoadedFrame {
   double network_ms = 0.0;     // of mask_ms: the network (pre-processing and inference)
   double crf_ms = 0.0;         // of mask_ms: the CRF
   double mask_fraction = 0.0;  // share of movable pixels, 0 when there is no mask
+  // The mask source runs on this frame (RunOptions::segment_every; set by the first
+  // segmentation stage).
+  bool segment = true;
   // Between the two segmentation threads of a pipelined mask source: the network's output.
   std::optional<FrameMask> pending_mask;
 };

@@ -59,6 +59,7 @@ void MaskOptions::Check() const {
     ThrowInput("--mask-source files: give the folder of mask PNGs (--mask-source files DIR)");
   }
   const bool model = IsModelSource(kind);
+  if (network_threads < 0) ThrowInput("network threads: must be >= 0, got {}", network_threads);
   if (kind != MaskSourceKind::kSynthGt && !model && !movable.empty()) {
     ThrowInput("--movable: applies to --mask-source synth-gt, onnx, detector and model only");
   }

@@ -63,6 +63,11 @@ struct MaskOptions {
   // there).
   std::optional<semantic::CrfMode> crf;
   int dilate_px = 0;  // grow every mask by this many pixels (elliptic), 0..semantic::kMaxDilatePx
+  // model: libtorch's intra-op threads in place of the card's `threads`; 0: the card's. `moslam
+  // run --deterministic` sets 1: libtorch's results depend on its thread count (the shipped
+  // person network's mask differs in a pixel or so between 1 and 2 threads on an AMD EPYC with
+  // AVX2, 2026-12-07), and a deterministic run must not.
+  int network_threads = 0;
   // InputError naming the command-line option of the first bad value.
   void Check() const;
 };

@@ -97,6 +97,7 @@ std::unique_ptr<MaskSource> MakeModelMaskSource(const MaskOptions& options) {
   semantic::RefineOptions refine = card.refine;
   if (options.crf) refine.crf = *options.crf;
   if (options.dilate_px > 0) refine.dilate_px = options.dilate_px;
+  if (options.network_threads > 0) card.threads = options.network_threads;
   return MakeProviderMaskSource(net::MakeAnyMaskProvider(card, refine));
 }
 

@@ -40,6 +40,17 @@ std::vector<double> Column(const RunResult& result, Get get) {
   return values;
 }
 
+// The same over the frames the mask source ran on (RunOptions::segment_every): the others took no
+// segmentation time, and their zeros would hide what one costs.
+template <typename Get>
+std::vector<double> SegmentedColumn(const RunResult& result, Get get) {
+  std::vector<double> values;
+  for (const FrameRecord& f : result.frames) {
+    if (f.segmented) values.push_back(get(f));
+  }
+  return values;
+}
+
 struct StageColumn {
   const char* name;
   std::vector<double> values;
@@ -75,9 +86,11 @@ nlohmann::json LoopsJson(const slam::MapSummary& map) {
 // thread too; its cost per frame is its total over the frames.
 nlohmann::json Breakdown(const RunResult& r) {
   const double frames = std::max<double>(1.0, static_cast<double>(r.frames.size()));
-  return {{"segmentation", Median(Column(r, [](const FrameRecord& f) { return f.network_ms; }))},
-          {"crf", Median(Column(r, [](const FrameRecord& f) { return f.crf_ms; }))},
-          {"segmentation_total", Median(Column(r, [](const FrameRecord& f) { return f.mask_ms; }))},
+  return {{"segmentation",
+           Median(SegmentedColumn(r, [](const FrameRecord& f) { return f.network_ms; }))},
+          {"crf", Median(SegmentedColumn(r, [](const FrameRecord& f) { return f.crf_ms; }))},
+          {"segmentation_total",
+           Median(SegmentedColumn(r, [](const FrameRecord& f) { return f.mask_ms; }))},
           {"extraction",
            Median(Column(r, [](const FrameRecord& f) { return f.report.times.extract_ms; }))},
           {"tracking", Median(Column(r,
@@ -245,40 +258,49 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                           {"p90", Percentile(column.values, 90.0)},
                           {"max", stats.max}};
   }
-  nlohmann::json json = {{"frames", result.frames.size()},
-                         {"frame_range", {result.first, result.last}},
-                         {"tracked", counts.ok},
-                         {"lost", counts.lost},
-                         {"not_initialized", counts.not_initialized},
-                         {"relocalized", counts.relocalized},
-                         {"recovered", counts.recovered},
-                         {"movable_points_erased", result.map.movable_points_erased},
-                         {"skipped", result.skipped},
-                         {"new_keyframe_frames", counts.keyframes},
-                         {"keyframes", result.map.keyframes},
-                         {"map_points", result.map.map_points},
-                         {"camera_poses", result.camera.size()},
-                         {"mapping",
-                          {{"steps", result.map.mapping_steps},
-                           {"median_ms", result.map.mapping_ms_median},
-                           {"total_ms", result.map.mapping_ms_total}}},
-                         {"loops_closed", result.map.loops_closed},
-                         {"loops_rejected", result.map.loops_rejected},
-                         {"global_ba_merged", result.map.global_ba_merged},
-                         {"loops", LoopsJson(result.map)},
-                         {"times_ms", times},
-                         {"breakdown_median_ms", Breakdown(result)},
-                         {"wall_s", result.wall_s},
-                         {"fps", Fps(result)},
-                         {"settings", SettingsJson(d)},
-                         {"dataset",
-                          {{"path", d.dataset_path},
-                           {"format", io::ToString(d.format)},
-                           {"sensor", io::ToString(d.sensor)}}},
-                         {"mask_source", d.mask_source},
-                         {"blas_core", net::DescribeOpenBlasCore()},
-                         {"deterministic", d.deterministic},
-                         {"realtime", d.realtime}};
+  nlohmann::json json = {
+      {"frames", result.frames.size()},
+      {"frame_range", {result.first, result.last}},
+      {"tracked", counts.ok},
+      {"lost", counts.lost},
+      {"not_initialized", counts.not_initialized},
+      {"relocalized", counts.relocalized},
+      {"recovered", counts.recovered},
+      {"movable_points_erased", result.map.movable_points_erased},
+      {"skipped", result.skipped},
+      {"new_keyframe_frames", counts.keyframes},
+      {"segmented_frames", std::count_if(result.frames.begin(), result.frames.end(),
+                                         [](const FrameRecord& f) { return f.segmented; })},
+      {"keyframes", result.map.keyframes},
+      {"map_points", result.map.map_points},
+      {"camera_poses", result.camera.size()},
+      {"mapping",
+       {{"steps", result.map.mapping_steps},
+        {"local_bundle_adjustments", result.map.local_bundle_adjustments},
+        {"median_ms", result.map.mapping_ms_median},
+        {"total_ms", result.map.mapping_ms_total}}},
+      {"loops_closed", result.map.loops_closed},
+      {"loops_rejected", result.map.loops_rejected},
+      {"global_ba_merged", result.map.global_ba_merged},
+      {"loops", LoopsJson(result.map)},
+      {"times_ms", times},
+      {"breakdown_median_ms", Breakdown(result)},
+      {"wall_s", result.wall_s},
+      {"fps", Fps(result)},
+      {"settings", SettingsJson(d)},
+      {"dataset",
+       {{"path", d.dataset_path},
+        {"format", io::ToString(d.format)},
+        {"sensor", io::ToString(d.sensor)}}},
+      {"mask_source", d.mask_source},
+      {"blas_core", net::DescribeOpenBlasCore()},
+      {"segment_every", d.segment_every},
+      {"deterministic", d.deterministic},
+      {"realtime", d.realtime}};
+  if (d.deterministic) {
+    json["deterministic_mapping"] = {{"frames", d.deterministic_mapping_frames},
+                                     {"ms_per_observation", d.deterministic_mapping_ms}};
+  }
   if (!d.format_name.empty()) json["dataset"]["format"] = d.format_name;
   json["ate"] = ate ? ate->json : nlohmann::json(nullptr);
   // How the run ended: "completed", or "failed" / "interrupted" with why; the counts above are

@@ -50,8 +50,11 @@ struct RunDescription {
   io::SensorType sensor = io::SensorType::kStereo;
   std::string settings_path;
   io::OrbSlamSettings settings;
-  std::string mask_source;  // MaskSource::Describe()
+  std::string mask_source;          // MaskSource::Describe()
+  std::string segment_every = "1";  // --segment-every: K or "auto"
   bool deterministic = false;
+  int deterministic_mapping_frames = 1;   // SystemOptions::deterministic_mapping_frames
+  double deterministic_mapping_ms = 0.0;  // SystemOptions::deterministic_mapping_ms_per_observation
   bool realtime = false;
 };
 

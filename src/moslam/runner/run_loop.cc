@@ -1,5 +1,6 @@
 #include "moslam/runner/run_loop.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <memory>
@@ -13,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "moslam/runner/segment_schedule.h"
 #include "moslam/runner/segmentation_stage.h"
 #include "moslam/util/atomic_file.h"
 #include "moslam/util/check.h"
@@ -97,7 +99,9 @@ FrameRange ParseFrameRange(const std::string& text, const std::string& option) {
 void RunOptions::Check() const {
   if (queue_capacity == 0) ThrowInput("run.queue_capacity: must be > 0");
   if (!(depth_factor > 0.0)) ThrowInput("run.depth_factor: must be > 0, got {}", depth_factor);
-  if (segment_every < 1) ThrowInput("--segment-every: must be >= 1, got {}", segment_every);
+  if (segment_every < 0) {
+    ThrowInput("--segment-every: must be >= 1, or 0 for auto, got {}", segment_every);
+  }
   if (image_size.width < 0 || image_size.height < 0) {
     ThrowInput("run.image_size: must not be negative, got {}x{}", image_size.width,
                image_size.height);
@@ -186,6 +190,22 @@ bool StopRequested(const RunOptions& options) {
   return options.stop != nullptr && options.stop->load() != 0;
 }
 
+SegmentScheduleOptions ScheduleOptions(const RunOptions& options, const io::Sequence& sequence,
+                                       size_t first, size_t last) {
+  SegmentScheduleOptions schedule;
+  schedule.every = options.segment_every;
+  if (options.realtime && last > first + 1) {
+    // The median interval of the range's frames: a data set's clock may have gaps.
+    std::vector<double> intervals;
+    for (size_t i = first + 1; i < last; ++i) {
+      intervals.push_back(sequence.frames[i].timestamp - sequence.frames[i - 1].timestamp);
+    }
+    std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+    schedule.paced_interval_ms = std::max(0.0, 1000.0 * intervals[intervals.size() / 2]);
+  }
+  return schedule;
+}
+
 // Frames result->first..last through the tracker, loaded and segmented in threads of their own;
 // returns when the range is done, when RunOptions::stop is set, or by throwing what a stage or
 // the tracker threw, after both threads have stopped.
@@ -199,26 +219,35 @@ void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& mas
       [&options](const io::FrameEntry& f) { return LoadImages(f, options); },
       options.queue_capacity);
   // A network source gets two stages, network then refinement (the CRF), so that on two
-  // cores the CRF of frame k runs beside the network of frame k+1.
-  // --segment-every: the frames the source runs on.
-  const auto due = [first = result->first, every = options.segment_every](const LoadedFrame& f) {
-    return (static_cast<size_t>(f.index) - first) % static_cast<size_t>(every) == 0;
+  // cores the CRF of frame k runs beside the network of frame k+1. The first stage decides
+  // whether the source runs on a frame (--segment-every) and the frame carries the decision.
+  SegmentSchedule schedule(ScheduleOptions(options, sequence, result->first, result->last));
+  const size_t first = result->first;
+  const auto decide = [&schedule, first](LoadedFrame& f) {
+    f.segment = schedule.Due(static_cast<size_t>(f.index) - first);
   };
   std::optional<SegmentationStage> network_stage;
   if (masks.Pipelined()) {
     network_stage.emplace([&loader] { return loader.Next(); }, [&loader] { loader.Stop(); },
-                          [&masks, &due](LoadedFrame& f) {
-                            if (due(f)) PredictFrame(masks, &f);
+                          [&masks, &decide, &schedule](LoadedFrame& f) {
+                            decide(f);
+                            if (!f.segment) return;
+                            PredictFrame(masks, &f);
+                            schedule.AddSegmentationMs(0, f.mask_ms);
                           },
                           options.queue_capacity);
   }
-  SegmentationStage stage([&] { return network_stage ? network_stage->Next() : loader.Next(); },
-                          [&] { network_stage ? network_stage->Stop() : loader.Stop(); },
-                          [&masks, &due, pipelined = masks.Pipelined()](LoadedFrame& f) {
-                            if (!due(f)) return;
-                            pipelined ? RefineFrame(masks, &f) : SegmentFrame(masks, &f);
-                          },
-                          options.queue_capacity);
+  SegmentationStage stage(
+      [&] { return network_stage ? network_stage->Next() : loader.Next(); },
+      [&] { network_stage ? network_stage->Stop() : loader.Stop(); },
+      [&masks, &decide, &schedule, pipelined = masks.Pipelined()](LoadedFrame& f) {
+        if (!pipelined) decide(f);
+        if (!f.segment) return;
+        const double before = f.mask_ms;
+        pipelined ? RefineFrame(masks, &f) : SegmentFrame(masks, &f);
+        schedule.AddSegmentationMs(pipelined ? 1 : 0, f.mask_ms - before);
+      },
+      options.queue_capacity);
   const double first_stamp = sequence.frames[result->first].timestamp;
   while (std::optional<LoadedFrame> frame = stage.Next()) {
     if (StopRequested(options)) {
@@ -243,8 +272,9 @@ void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& mas
     record.network_ms = frame->network_ms;
     record.crf_ms = frame->crf_ms;
     record.mask_fraction = frame->mask_fraction;
-    record.segmented = due(*frame);
+    record.segmented = frame->segment;
     record.report = TrackFrame(tracker, *frame);
+    schedule.AddTrackingMs(record.report.times.total_ms);
     if (!options.keyframe_mask_folder.empty() && !record.report.keyframe_mask.empty()) {
       WriteKeyFrameMask(options.keyframe_mask_folder, record.timestamp,
                         record.report.keyframe_mask);

@@ -58,7 +58,8 @@ struct RunOptions {
   double depth_factor = io::kTumDepthFactor;      // raw depth units per metre (RGB-D)
   // The mask source runs on every k-th frame of the range only (from its first frame); the
   // others reach the tracker without a mask, which carries the last one into them
-  // (slam::SystemOptions::mask_propagation_frames; `moslam run --segment-every K`).
+  // (slam::SystemOptions::mask_propagation_frames; `moslam run --segment-every K`). 0: auto, k
+  // chosen from the measured times as the run goes (runner/segment_schedule.h).
   int segment_every = 1;
   // The size every image must have: the settings' Camera.width x Camera.height, for which their
   // intrinsics hold (an image of another size would be tracked with wrong ones); 0x0: any size.

@@ -4,9 +4,11 @@
 #include "moslam/runner/mask_damage.h"
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
+#include <thread>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -238,8 +240,44 @@ TEST(RunLoopTest, SegmentEveryKRunsTheSourceOnEveryKthFrameOnly) {
   options.segment_every = 1;
   RunSequence(seq, second, *damaged, options);
   for (const cv::Mat& mask : second.masks) EXPECT_EQ(cv::countNonZero(mask), 0);
-  options.segment_every = 0;
+  options.segment_every = -1;
   EXPECT_THROW(RunSequence(seq, tracker, masks, options), InputError);
+}
+
+// A source that takes 40 ms a frame.
+class SlowMasks : public FullMasks {
+ public:
+  FrameMask MaskFor(const io::FrameEntry& entry, const cv::Size& size) const override {
+    std::this_thread::sleep_for(std::chrono::milliseconds(40));
+    return FullMasks::MaskFor(entry, size);
+  }
+};
+
+// --segment-every auto: the fake tracker says it takes 2-31 ms a frame, the source takes 40, so
+// once both are measured the source runs on every second to fourth frame only; the frames
+// segmented before the first tracking time arrived (the stages run a few frames ahead) are all
+// segmented.
+TEST(RunLoopTest, SegmentEveryAutoSkipsFramesWhenTheSourceIsSlowerThanTracking) {
+  testing::TempDir data;
+  test::MakeKitti(data, 30);
+  const io::Sequence seq = io::ReadDataset(data.path());
+  SlowMasks masks;
+  FakeTracker tracker;
+  RunOptions options = Quiet();
+  options.segment_every = 0;
+  const RunResult result = RunSequence(seq, tracker, masks, options);
+  ASSERT_EQ(result.frames.size(), 30u);
+  int segmented = 0;
+  for (size_t k = 0; k < 30; ++k) {
+    segmented += result.frames[k].segmented ? 1 : 0;
+    EXPECT_EQ(tracker.masks[k].empty(), !result.frames[k].segmented) << "frame " << k;
+    if (k >= 20 && result.frames[k].segmented) {
+      EXPECT_FALSE(result.frames[k - 1].segmented) << "frame " << k;
+    }
+  }
+  EXPECT_TRUE(result.frames[0].segmented);
+  EXPECT_LT(segmented, 25);
+  EXPECT_GE(segmented, 30 / 4);
 }
 
 TEST(RunLoopTest, FrameRangeSelectsAndIsChecked) {

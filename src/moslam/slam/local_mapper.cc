@@ -81,7 +81,8 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
     SearchInNeighbors(map_, keyframe, camera_, options_.monocular ? 20 : 10);
   }
   abort_ba_ = false;  // a request from before this keyframe's adjustment is void (ORB-SLAM2)
-  if (!busy() && options_.local_bundle_adjustment) LocalBundleAdjustment(keyframe);
+  const bool adjust = !busy() && options_.local_bundle_adjustment;
+  if (adjust) LocalBundleAdjustment(keyframe);
   if (options_.keyframe_culling) {
     std::lock_guard<std::mutex> lock(map_->mutex());
     CullRedundantKeyFrames(map_, keyframe, options_.close_depth);
@@ -90,11 +91,17 @@ void LocalMapper::ProcessKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   std::lock_guard<std::mutex> lock(stats_mutex_);
   step_ms_.push_back(ms);
+  if (adjust) ++local_bundle_adjustments_;
 }
 
 std::vector<double> LocalMapper::StepTimes() const {
   std::lock_guard<std::mutex> lock(stats_mutex_);
   return step_ms_;
+}
+
+int LocalMapper::LocalBundleAdjustments() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return local_bundle_adjustments_;
 }
 
 void LocalMapper::InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) {
@@ -200,6 +207,7 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
       problem.edges.push_back(edge);
     }
   }
+  last_adjustment_observations_ = edges.size();
   optim::BundleAdjusterOptions options;
   options.num_threads = options_.num_threads;
   options.stop = &abort_ba_;

@@ -72,6 +72,12 @@ class LocalMapper {
 
   // Milliseconds per processed keyframe (thread-safe copy).
   std::vector<double> StepTimes() const;
+  // Local bundle adjustments run so far (keyframes mapped while others waited run none).
+  int LocalBundleAdjustments() const;
+  // Observations (residuals) of the last local bundle adjustment set up; 0 before the first. A
+  // measure of mapping's work that does not depend on the machine (System's deterministic
+  // stand-in for the mapping thread times keyframes by it).
+  size_t LastAdjustmentObservations() const { return last_adjustment_observations_.load(); }
 
  private:
   void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe);
@@ -87,6 +93,8 @@ class LocalMapper {
   std::atomic<bool> abort_ba_{false};
   mutable std::mutex stats_mutex_;
   std::vector<double> step_ms_;
+  int local_bundle_adjustments_ = 0;
+  std::atomic<size_t> last_adjustment_observations_{0};
 };
 
 }  // namespace moslam::slam

@@ -8,6 +8,10 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -54,6 +58,14 @@ void SystemOptions::Check() const {
       sensor != io::SensorType::kMonocular) {
     throw InputError("SystemOptions.sensor: only stereo, rgbd and monocular are supported (got " +
                      std::string(io::ToString(sensor)) + ")");
+  }
+  if (deterministic_mapping_frames < 0) {
+    throw InputError("SystemOptions.deterministic_mapping_frames must be >= 0, got " +
+                     std::to_string(deterministic_mapping_frames));
+  }
+  if (!(deterministic_mapping_ms_per_observation >= 0.0)) {
+    throw InputError("SystemOptions.deterministic_mapping_ms_per_observation must be >= 0, got " +
+                     std::to_string(deterministic_mapping_ms_per_observation));
   }
   if (keyframe_queue_capacity < 1) {
     throw InputError("SystemOptions.keyframe_queue_capacity must be >= 1");
@@ -200,25 +212,78 @@ class System::Impl : public KeyFrameSink {
     return t;
   }
 
+  // Deterministic mode with SystemOptions::deterministic_mapping_frames > 1 stands in for the
+  // mapping thread with a queue on a clock of tracked frames: the keyframe at the front is mapped
+  // that many frames after it reached the front, at the start of the frame then tracked, and the
+  // keyframes inserted meanwhile wait behind it. So tracking sees a busy mapper, a queue and a map
+  // that lags as a threaded run's does, and local mapping skips what a thread skips while
+  // keyframes wait (LocalMapper::ProcessKeyFrame: the neighbour search and the local bundle
+  // adjustment) - the two things that make a deterministic run slower than a threaded one.
+  bool VirtualQueue() const {
+    return options_.deterministic && options_.deterministic_mapping_frames != 1 && !finished_;
+  }
+  // The frames the keyframe reaching the front of the virtual queue takes: fixed, or (0) by the
+  // work of the last local bundle adjustment at the settings' frame rate, at most a second.
+  int64_t VirtualMappingFrames() const {
+    if (options_.deterministic_mapping_frames > 1) return options_.deterministic_mapping_frames;
+    const double fps = std::max(1.0, static_cast<double>(options_.settings.fps));
+    const double ms = static_cast<double>(mapper_.LastAdjustmentObservations()) *
+                      options_.deterministic_mapping_ms_per_observation;
+    const double frames = 1.0 + std::ceil(ms * fps / 1000.0);
+    return static_cast<int64_t>(std::min(frames, std::max(2.0, fps)));
+  }
   bool MappingIdle() const override {
+    if (VirtualQueue()) return virtual_queue_.empty();
     return options_.deterministic || (!mapping_busy_.load() && queue_.size() == 0);
   }
-  size_t QueuedKeyFrames() const override { return queue_.size(); }
-  void InterruptMapping() override { mapper_.InterruptBundleAdjustment(); }
+  size_t QueuedKeyFrames() const override {
+    // The keyframe being mapped is not in the queue (ORB-SLAM2's mlNewKeyFrames).
+    if (VirtualQueue()) return virtual_queue_.empty() ? 0 : virtual_queue_.size() - 1;
+    return queue_.size();
+  }
+  void InterruptMapping() override {
+    if (VirtualQueue()) {
+      // The running bundle adjustment stops: the keyframe at the front is done next frame.
+      if (!virtual_queue_.empty()) {
+        virtual_mapped_at_ = std::min(virtual_mapped_at_, frame_index_ + 1);
+      }
+      return;
+    }
+    mapper_.InterruptBundleAdjustment();
+  }
   void InsertKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe) override {
+    if (VirtualQueue()) {
+      if (virtual_queue_.empty()) virtual_mapped_at_ = frame_index_ + VirtualMappingFrames();
+      virtual_queue_.push_back(keyframe);
+      return;
+    }
     // Synchronous in deterministic mode, and after Finish() closed the queue (Track() may still
     // be called then; its keyframes are mapped in the caller's thread).
-    if (options_.deterministic || !queue_.Push(keyframe)) {
-      mapper_.ProcessKeyFrame(keyframe);
-      if (loop_closer_) loop_closer_->ProcessKeyFrame(keyframe);
+    if (options_.deterministic || !queue_.Push(keyframe)) MapKeyFrame(keyframe, {});
+  }
+  void MapKeyFrame(const std::shared_ptr<map::KeyFrame>& keyframe,
+                   const std::function<bool()>& more_queued) {
+    mapper_.ProcessKeyFrame(keyframe, more_queued);
+    if (loop_closer_) loop_closer_->ProcessKeyFrame(keyframe);
+  }
+  // The virtual queue's keyframes whose time has come (all of them with `all`), in order.
+  void MapDueKeyFrames(bool all) {
+    while (!virtual_queue_.empty() && (all || frame_index_ >= virtual_mapped_at_)) {
+      const std::shared_ptr<map::KeyFrame> keyframe = virtual_queue_.front();
+      virtual_queue_.pop_front();
+      MapKeyFrame(keyframe, [this] { return !virtual_queue_.empty(); });
+      virtual_mapped_at_ += VirtualMappingFrames();
     }
   }
 
   FrameReport Track(const FrameInput& input) {
     FrameReport report;
     const auto t0 = std::chrono::steady_clock::now();
+    if (VirtualQueue()) MapDueKeyFrames(false);
+    const double mapped_ms = MsSince(t0);
+    const auto t_mask = std::chrono::steady_clock::now();
     const cv::Mat mask = MaskFor(input);
-    report.times.mask_ms = MsSince(t0);
+    report.times.mask_ms = MsSince(t_mask);
     feature::Frame frame = MakeFrame(input, mask);
     if (options_.mask_margin_px > 0 && !mask.empty()) {
       const auto t1 = std::chrono::steady_clock::now();
@@ -227,7 +292,7 @@ class System::Impl : public KeyFrameSink {
       report.times.mask_ms += MsSince(t1);
     }
     report.num_features = static_cast<int>(frame.size());
-    report.times.extract_ms = MsSince(t0);
+    report.times.extract_ms = MsSince(t_mask);
     // Map points are judged by the network's own mask only: carried and completed pixels are
     // good enough to keep the extractor off a body, but they also cover the static surface a
     // body has just left or stands on, at the same depth, and would erase it.
@@ -236,7 +301,9 @@ class System::Impl : public KeyFrameSink {
     FollowPose(outcome);
     report.movable_points_erased = outcome.movable.erased + outcome.residual_erased;
     movable_points_erased_ += report.movable_points_erased;
-    if (outcome.status == TrackStatus::kInitialized) initialized_frame_ = frame_index_;
+    if (outcome.status == TrackStatus::kInitialized) {
+      initialized_frame_ = static_cast<int>(frame_index_);
+    }
     ++frame_index_;
     report.reason = outcome.reason;
     report.num_matches = outcome.num_matches;
@@ -249,7 +316,8 @@ class System::Impl : public KeyFrameSink {
     if (outcome.recovered) ++recoveries_;
     report.times.track_ms = outcome.track_ms;
     report.times.local_map_ms = outcome.local_map_ms;
-    report.times.keyframe_ms = outcome.keyframe_ms;
+    // Deterministic: mapping, synchronous, is counted with the keyframes.
+    report.times.keyframe_ms = outcome.keyframe_ms + mapped_ms;
     switch (outcome.status) {
       case TrackStatus::kNotInitialized:
         report.state = TrackingState::kNotInitialized;
@@ -271,6 +339,8 @@ class System::Impl : public KeyFrameSink {
   }
 
   void Finish() {
+    if (VirtualQueue()) MapDueKeyFrames(true);
+    finished_ = true;  // keyframes of later Track() calls are mapped at once
     queue_.Close();
     if (mapping_thread_.joinable()) mapping_thread_.join();
     // Mapping has handed over its last keyframe: drain loop closing, then its global BA.
@@ -383,6 +453,7 @@ class System::Impl : public KeyFrameSink {
     summary.resets = tracker_.rejected_initializations();
     const std::vector<double> steps = mapper_.StepTimes();
     summary.mapping_steps = static_cast<int>(steps.size());
+    summary.local_bundle_adjustments = mapper_.LocalBundleAdjustments();
     for (double ms : steps) summary.mapping_ms_total += ms;
     summary.mapping_ms_median = eval::Median(steps);
     return summary;
@@ -522,7 +593,12 @@ class System::Impl : public KeyFrameSink {
   // with.
   std::unique_ptr<FrameMask> frame_mask_;
   std::optional<geometry::SE3> last_T_cam_world_, velocity_;
-  int frame_index_ = 0;
+  int64_t frame_index_ = 0;
+  // Deterministic stand-in for the mapping thread (VirtualQueue()): the keyframes waiting, the
+  // first being mapped, and the frame at whose start it is done.
+  std::deque<std::shared_ptr<map::KeyFrame>> virtual_queue_;
+  int64_t virtual_mapped_at_ = 0;
+  bool finished_ = false;
   int initialized_frame_ = -1;
   ViewMemory view_memory_;                       // System::View's, untouched while nobody watches
   bool watched_ = false;                         // System::Watch

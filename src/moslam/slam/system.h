@@ -35,6 +35,23 @@ struct SystemOptions {
   // Mapping synchronously after each keyframe, fixed seeds, one thread everywhere.
   bool deterministic = false;
   int keyframe_queue_capacity = 8;  // bounded queue tracking -> local mapping (keyframes)
+  // Deterministic mode only: how local mapping is timed (issue 28). 1 (default): each keyframe is
+  // mapped at once, so mapping is never busy, tracking makes a keyframe whenever it would like
+  // one and every keyframe runs its local bundle adjustment: 5-7x slower than a threaded run on
+  // the walking presets. Otherwise a stand-in for the mapping thread: keyframes wait in a queue on
+  // a clock of tracked frames and are mapped at the start of the frame their time comes in, so
+  // tracking sees a busy mapper (ORB-SLAM2's AcceptKeyFrames is false while it maps, and tracking
+  // then inserts a keyframe only when it must: slam/tracker.cc, NeedNewKeyFrame) and a map that
+  // lags, and the keyframes mapped while others wait skip the neighbour search and the local
+  // bundle adjustment, as a thread does. A keyframe takes this many frames (>= 2), or with 0 as
+  // long as its thread would on the data set's clock (settings' Camera.fps): 1 + the observations
+  // of the last local bundle adjustment x deterministic_mapping_ms_per_observation, in frames, at
+  // most a second's (mapping's work, counted without a clock: the same on every machine). On the
+  // RGB-D walking presets 0 makes as many keyframes as threaded runs at 0.5-1.1x their speed; on
+  // monocular KITTI 07 and the stereo street presets the map then lags too far (docs/RUNNING.md,
+  // "Deterministic runs"), which is why it is not the default.
+  int deterministic_mapping_frames = 1;
+  double deterministic_mapping_ms_per_observation = 0.12;
   // Nice increment (0-19) of the local-mapping and loop-closing threads (and the global bundle
   // adjustments they start). Local mapping keeps a core busy refining the map whenever it can;
   // on a 2-core machine that also runs a segmentation network it would take its share from
@@ -202,8 +219,9 @@ struct MapSummary {
   // Per closed loop: the timestamps (s) of the current and the loop keyframe, so that a run's
   // summary tells a true loop (a return to an earlier place) from a false one.
   std::vector<std::pair<double, double>> loop_times;
-  int mapping_steps = 0;           // keyframes processed by local mapping
-  double mapping_ms_median = 0.0;  // per processed keyframe
+  int mapping_steps = 0;             // keyframes processed by local mapping
+  int local_bundle_adjustments = 0;  // of those, the ones that ran a local bundle adjustment
+  double mapping_ms_median = 0.0;    // per processed keyframe
   double mapping_ms_total = 0.0;
 };
 

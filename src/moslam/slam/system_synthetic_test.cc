@@ -8,6 +8,7 @@
 #include "moslam/synth/generator.h"
 #include "moslam/testing/sanitizer.h"
 #include "moslam/testing/shared_data.h"
+#include "moslam/util/error.h"
 
 namespace moslam::slam {
 namespace {
@@ -45,6 +46,52 @@ TEST(SystemSynthetic, RgbdWithMovingMasksTracksEveryFrameAndBeatsUnmasked) {
   ASSERT_EQ(unmasked.reports.size(), 60u);
   EXPECT_GT(unmasked.ate_rmse, 5.0 * run.ate_rmse);  // measured 18-65x, seeds 1-4
   std::printf("synthetic w_xyz 60 frames without masks: ATE RMSE %.4f m\n", unmasked.ate_rmse);
+}
+
+// The deterministic stand-in for the mapping thread (SystemOptions::deterministic_mapping_frames,
+// issue 28): with local mapping taking 4 frames per keyframe, keyframes wait in its queue and
+// those mapped while others wait run no local bundle adjustment, as in a threaded run; the run
+// stays as accurate and is still repeatable to the last bit.
+TEST(SystemSynthetic, DeterministicMappingQueueSkipsAdjustmentsAndStaysRepeatable) {
+  const testing::TempDir dir;
+  Generate("w_xyz", 3, 60, dir);
+  const auto queued = [](SystemOptions* o) { o->deterministic_mapping_frames = 4; };
+  const std::string settings = dir.path() + "/settings.yaml";
+  const DatasetRun at_once =
+      RunDataset(dir.path(), settings, true, 0, "moving",
+                 [](SystemOptions* o) { o->deterministic_mapping_frames = 1; });
+  const DatasetRun first = RunDataset(dir.path(), settings, true, 0, "moving", queued);
+  const DatasetRun second = RunDataset(dir.path(), settings, true, 0, "moving", queued);
+  const auto created = [](const DatasetRun& run) {
+    int n = 0;
+    for (const FrameReport& r : run.reports) n += r.new_keyframe ? 1 : 0;
+    return n;
+  };
+  std::printf(
+      "w_xyz seed 3, 60 frames: mapped at once: %d keyframes, %d local BAs, ATE %.4f m; 4 frames "
+      "a keyframe: %d keyframes, %d local BAs, ATE %.4f m\n",
+      created(at_once), at_once.summary.local_bundle_adjustments, at_once.ate_rmse, created(first),
+      first.summary.local_bundle_adjustments, first.ate_rmse);
+  // Mapped at once, every keyframe is adjusted (the first two form the map).
+  EXPECT_EQ(at_once.summary.mapping_steps, created(at_once));
+  EXPECT_GE(at_once.summary.local_bundle_adjustments, created(at_once) - 2);
+  // Every keyframe is mapped by the end (but those culled while they waited), fewer are adjusted.
+  EXPECT_EQ(first.frames_ok, 60);
+  EXPECT_LE(first.summary.mapping_steps, created(first));
+  EXPECT_GT(first.summary.mapping_steps, created(first) / 2);
+  EXPECT_GE(first.summary.local_bundle_adjustments, 1);
+  EXPECT_LT(first.summary.local_bundle_adjustments, at_once.summary.local_bundle_adjustments);
+  EXPECT_GE(first.ate_rmse, 0.0);
+  EXPECT_LT(first.ate_rmse, 0.03);
+  EXPECT_EQ(created(second), created(first));
+  EXPECT_EQ(second.summary.local_bundle_adjustments, first.summary.local_bundle_adjustments);
+  EXPECT_EQ(second.ate_rmse, first.ate_rmse);
+  SystemOptions bad;
+  bad.deterministic_mapping_frames = -1;
+  EXPECT_THROW(bad.Check(), InputError);
+  bad = {};
+  bad.deterministic_mapping_ms_per_observation = -1.0;
+  EXPECT_THROW(bad.Check(), InputError);
 }
 
 // Imperfect masks (issue 24): the generator's exact masks, but every third frame has none (a
