@@ -106,6 +106,7 @@ nlohmann::json Breakdown(const RunResult& r) {
 
 struct StateCounts {
   int ok = 0, lost = 0, not_initialized = 0, keyframes = 0, relocalized = 0, recovered = 0;
+  int segmented = 0;  // frames the mask source ran on
 };
 
 StateCounts CountStates(const RunResult& result) {
@@ -117,6 +118,7 @@ StateCounts CountStates(const RunResult& result) {
     if (f.report.new_keyframe) ++counts.keyframes;
     if (f.report.relocalized) ++counts.relocalized;
     if (f.report.recovered) ++counts.recovered;
+    if (f.segmented) ++counts.segmented;
   }
   return counts;
 }
@@ -258,45 +260,43 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                           {"p90", Percentile(column.values, 90.0)},
                           {"max", stats.max}};
   }
-  nlohmann::json json = {
-      {"frames", result.frames.size()},
-      {"frame_range", {result.first, result.last}},
-      {"tracked", counts.ok},
-      {"lost", counts.lost},
-      {"not_initialized", counts.not_initialized},
-      {"relocalized", counts.relocalized},
-      {"recovered", counts.recovered},
-      {"movable_points_erased", result.map.movable_points_erased},
-      {"skipped", result.skipped},
-      {"new_keyframe_frames", counts.keyframes},
-      {"segmented_frames", std::count_if(result.frames.begin(), result.frames.end(),
-                                         [](const FrameRecord& f) { return f.segmented; })},
-      {"keyframes", result.map.keyframes},
-      {"map_points", result.map.map_points},
-      {"camera_poses", result.camera.size()},
-      {"mapping",
-       {{"steps", result.map.mapping_steps},
-        {"local_bundle_adjustments", result.map.local_bundle_adjustments},
-        {"median_ms", result.map.mapping_ms_median},
-        {"total_ms", result.map.mapping_ms_total}}},
-      {"loops_closed", result.map.loops_closed},
-      {"loops_rejected", result.map.loops_rejected},
-      {"global_ba_merged", result.map.global_ba_merged},
-      {"loops", LoopsJson(result.map)},
-      {"times_ms", times},
-      {"breakdown_median_ms", Breakdown(result)},
-      {"wall_s", result.wall_s},
-      {"fps", Fps(result)},
-      {"settings", SettingsJson(d)},
-      {"dataset",
-       {{"path", d.dataset_path},
-        {"format", io::ToString(d.format)},
-        {"sensor", io::ToString(d.sensor)}}},
-      {"mask_source", d.mask_source},
-      {"blas_core", net::DescribeOpenBlasCore()},
-      {"segment_every", d.segment_every},
-      {"deterministic", d.deterministic},
-      {"realtime", d.realtime}};
+  nlohmann::json json = {{"frames", result.frames.size()},
+                         {"frame_range", {result.first, result.last}},
+                         {"tracked", counts.ok},
+                         {"lost", counts.lost},
+                         {"not_initialized", counts.not_initialized},
+                         {"relocalized", counts.relocalized},
+                         {"recovered", counts.recovered},
+                         {"movable_points_erased", result.map.movable_points_erased},
+                         {"skipped", result.skipped},
+                         {"new_keyframe_frames", counts.keyframes},
+                         {"segmented_frames", counts.segmented},
+                         {"keyframes", result.map.keyframes},
+                         {"map_points", result.map.map_points},
+                         {"camera_poses", result.camera.size()},
+                         {"mapping",
+                          {{"steps", result.map.mapping_steps},
+                           {"local_bundle_adjustments", result.map.local_bundle_adjustments},
+                           {"median_ms", result.map.mapping_ms_median},
+                           {"total_ms", result.map.mapping_ms_total}}},
+                         {"loops_closed", result.map.loops_closed},
+                         {"loops_rejected", result.map.loops_rejected},
+                         {"global_ba_merged", result.map.global_ba_merged},
+                         {"loops", LoopsJson(result.map)},
+                         {"times_ms", times},
+                         {"breakdown_median_ms", Breakdown(result)},
+                         {"wall_s", result.wall_s},
+                         {"fps", Fps(result)},
+                         {"settings", SettingsJson(d)},
+                         {"dataset",
+                          {{"path", d.dataset_path},
+                           {"format", io::ToString(d.format)},
+                           {"sensor", io::ToString(d.sensor)}}},
+                         {"mask_source", d.mask_source},
+                         {"blas_core", net::DescribeOpenBlasCore()},
+                         {"segment_every", d.segment_every},
+                         {"deterministic", d.deterministic},
+                         {"realtime", d.realtime}};
   if (d.deterministic) {
     json["deterministic_mapping"] = {{"frames", d.deterministic_mapping_frames},
                                      {"ms_per_observation", d.deterministic_mapping_ms}};

@@ -10,8 +10,9 @@
 namespace moslam::runner {
 
 void SegmentScheduleOptions::Check() const {
-  if (every < 0)
+  if (every < 0) {
     throw InputError(fmt::format("--segment-every: must be >= 1 or auto, got {}", every));
+  }
   if (max_every < 1) {
     throw InputError(
         fmt::format("SegmentScheduleOptions.max_every: must be >= 1, got {}", max_every));

@@ -212,13 +212,13 @@ class System::Impl : public KeyFrameSink {
     return t;
   }
 
-  // Deterministic mode with SystemOptions::deterministic_mapping_frames > 1 stands in for the
-  // mapping thread with a queue on a clock of tracked frames: the keyframe at the front is mapped
-  // that many frames after it reached the front, at the start of the frame then tracked, and the
-  // keyframes inserted meanwhile wait behind it. So tracking sees a busy mapper, a queue and a map
-  // that lags as a threaded run's does, and local mapping skips what a thread skips while
-  // keyframes wait (LocalMapper::ProcessKeyFrame: the neighbour search and the local bundle
-  // adjustment) - the two things that make a deterministic run slower than a threaded one.
+  // Deterministic mode with SystemOptions::deterministic_mapping_frames other than 1 stands in for
+  // the mapping thread with a queue on a clock of tracked frames: the keyframe at the front is
+  // mapped VirtualMappingFrames() after it reached the front, at the start of the frame then
+  // tracked, and the keyframes inserted meanwhile wait behind it. So tracking sees a busy mapper,
+  // a queue and a map that lags as a threaded run's does, and local mapping skips what a thread
+  // skips while keyframes wait (LocalMapper::ProcessKeyFrame: the neighbour search and the local
+  // bundle adjustment) - the two things that make a deterministic run slower than a threaded one.
   bool VirtualQueue() const {
     return options_.deterministic && options_.deterministic_mapping_frames != 1 && !finished_;
   }
