@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "commands.h"
+#include "moslam/io/camera.h"
 #include "moslam/io/dataset.h"
 #include "moslam/io/image.h"
 #include "moslam/io/orbslam_settings.h"
@@ -26,6 +27,8 @@
 #include "moslam/runner/stop_signals.h"
 #include "moslam/runner/tracker.h"
 #include "moslam/semantic/mask_refine.h"
+#include "moslam/sensors/kinect.h"
+#include "moslam/sensors/rosbag.h"
 #include "moslam/util/error.h"
 #include "moslam/util/strings.h"
 #include "moslam/viewer/live_viewer.h"
@@ -51,6 +54,8 @@ struct RunArgs {
   std::string skip_frames;
   std::string vocabulary = "default";  // FILE, "default" (the shipped one) or "none"
   double rate_hz = 0.0;
+  bool side_by_side = false;  // --dataset camera: stereo halves of one device's frames
+  std::string topics;         // --dataset rosbag: image topics, comma-separated
   size_t queue = 4;
   bool realtime = false;
   bool deterministic = false;
@@ -93,6 +98,21 @@ struct RunArgs {
   int64_t viewer_pause_at = -1;  // -1: none
   bool viewer_exit = false;
 };
+
+// "a,b" as its trimmed parts; an empty part is an error naming `option`.
+std::vector<std::string> SplitList(const std::string& text, const std::string& option) {
+  std::vector<std::string> parts;
+  size_t begin = 0;
+  while (true) {
+    const size_t comma = text.find(',', begin);
+    const std::string part(Trim(std::string_view(text).substr(
+        begin, comma == std::string::npos ? std::string::npos : comma - begin)));
+    if (part.empty()) ThrowInput("{}: an empty name in '{}'", option, text);
+    parts.push_back(part);
+    if (comma == std::string::npos) return parts;
+    begin = comma + 1;
+  }
+}
 
 // The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
 // moslam is run from like the configs/ paths of the examples.
@@ -271,18 +291,23 @@ void SetImageSize(const io::Sequence& sequence, const std::string& settings_path
   options->image_size_source = source;
 }
 
-// --dataset video FILE: a monocular sequence whose frames are decoded in the loader thread
-// (io/video.h), stamped by the container or by --rate. Masks that are files named after the
-// images (files, synth-gt) have nothing to be named after.
-void SetUpVideo(const RunArgs& args, const std::string& path, io::Sequence* sequence,
-                runner::RunOptions* options) {
+// Masks that are files named after the images (files, synth-gt) have nothing to be named after
+// in a video, a bag or a camera's frames.
+void RefuseFileMasks(const RunArgs& args, const std::string& what) {
   const auto kind = runner::ParseMaskSourceKind(args.mask_source.at(0));
   if (kind == runner::MaskSourceKind::kFiles || kind == runner::MaskSourceKind::kSynthGt) {
     ThrowInput(
-        "--mask-source {}: needs image files named like the masks; a video ({}) has none "
-        "(onnx, detector or model compute masks from the frames)",
-        args.mask_source[0], path);
+        "--mask-source {}: needs image files named like the masks; {} has none (onnx, "
+        "detector or model compute masks from the frames)",
+        args.mask_source[0], what);
   }
+}
+
+// --dataset video FILE: a monocular sequence whose frames are decoded in the loader thread
+// (io/video.h), stamped by the container or by --rate.
+void SetUpVideo(const RunArgs& args, const std::string& path, io::Sequence* sequence,
+                runner::RunOptions* options) {
+  RefuseFileMasks(args, fmt::format("a video ({})", path));
   io::VideoOptions video;
   video.rate_hz = args.rate_hz;
   *sequence = io::ReadVideo(path, video);
@@ -314,34 +339,122 @@ std::unique_ptr<viewer::LiveViewer> MakeViewer(const RunArgs& args, const io::Se
   return live;
 }
 
-void Run(const RunArgs& args) {
-  const bool video = args.dataset.at(0) == "video";
-  const auto format = io::ParseDatasetFormat(video ? "auto" : args.dataset.at(0));
-  if (!format || (*format == io::DatasetFormat::kAuto && !video)) {
-    ThrowInput("--dataset: unknown format '{}' (tum, kitti, euroc, folder, video)",
-               args.dataset[0]);
-  }
-  const std::string& path = args.dataset.at(1);
-  // The settings are read first: an image folder takes its frame rate from Camera.fps.
-  io::DatasetOptions dataset_options;
-  dataset_options.format = *format;
-  dataset_options.monocular = args.monocular;
-  io::Sequence sequence;
+// What a run reads: a sequence (a data set, a video, a bag) or a live source, with the settings
+// for its sensor and how its frames are loaded.
+struct RunInput {
+  io::Sequence sequence;  // a live source's: name, root and sensor only, no frames
+  std::unique_ptr<io::LiveSource> live;
   io::OrbSlamSettings settings;
   runner::RunOptions options;
-  if (video) {
-    settings = io::LoadOrbSlamSettings(args.settings, io::SensorType::kMonocular);
-    SetUpVideo(args, path, &sequence, &options);
-  } else if (*format == io::DatasetFormat::kImageFolder) {
-    settings = io::LoadOrbSlamSettings(args.settings, io::SensorType::kMonocular);
-    dataset_options.image_folder_rate_hz = args.rate_hz > 0 ? args.rate_hz : settings.fps;
-    sequence = io::ReadDataset(path, dataset_options);
-  } else {
-    sequence = io::ReadDataset(path, dataset_options);
-    settings = io::LoadOrbSlamSettings(args.settings, sequence.sensor);
-  }
-  if (sequence.empty()) ThrowInFile(path, "data set has no frames");
+  std::string format_name;  // summary.json's format when it is no io::DatasetFormat
+  io::DatasetFormat format = io::DatasetFormat::kAuto;
+};
 
+// --dataset camera DEVICE[,DEVICE] (--side-by-side) or kinect INDEX: a live source, opened
+// with the size the settings' intrinsics are for.
+void SetUpLive(const RunArgs& args, const std::string& kind, const std::string& device,
+               RunInput* input) {
+  RefuseFileMasks(args, fmt::format("a live source ({})", device));
+  io::SensorType sensor = io::SensorType::kRgbD;
+  io::CameraOptions camera;
+  if (kind == "camera") {
+    camera.devices = SplitList(device, "--dataset camera");
+    camera.side_by_side = args.side_by_side;
+    sensor = camera.devices.size() == 2 || camera.side_by_side ? io::SensorType::kStereo
+                                                               : io::SensorType::kMonocular;
+  } else if (args.side_by_side) {
+    ThrowInput("--side-by-side: for --dataset camera, not {}", kind);
+  }
+  input->settings = io::LoadOrbSlamSettings(args.settings, sensor);
+  if (input->settings.camera.HasSize()) {
+    camera.size = cv::Size(input->settings.camera.width, input->settings.camera.height);
+  }
+  camera.fps = input->settings.fps;
+  if (kind == "camera") {
+    input->live = io::OpenCamera(camera);
+  } else {
+    input->live = sensors::OpenKinect(sensors::ParseKinectIndex(device), camera.size);
+  }
+  input->format_name = kind;
+  input->sequence.name = kind;
+  input->sequence.root = input->live->name();
+  input->sequence.sensor = sensor;
+  if (!input->settings.camera.HasSize()) {
+    const cv::Size size = input->live->image_size();
+    io::CompleteImageSize(&input->settings, args.settings, size.width, size.height,
+                          input->live->name());
+  }
+}
+
+// --dataset rosbag FILE --topics A,B: the bag's image topics as a sequence whose frames are
+// read in the loader thread (sensors/rosbag.h).
+void SetUpRosbag(const RunArgs& args, const std::string& path, RunInput* input) {
+  RefuseFileMasks(args, fmt::format("a bag ({})", path));
+  sensors::RosbagOptions bag;
+  bag.topics = SplitList(args.topics, "--topics");
+  bag.Check();
+  auto reader = std::make_shared<sensors::RosbagReader>(path, bag);
+  input->sequence = reader->sequence();
+  if (args.monocular) input->sequence = io::ToMonocular(std::move(input->sequence));
+  input->settings = io::LoadOrbSlamSettings(args.settings, input->sequence.sensor);
+  input->format_name = "rosbag";
+  const io::ColourMode colour = input->sequence.sensor == io::SensorType::kRgbD
+                                    ? io::ColourMode::kColour
+                                    : io::ColourMode::kGrey;
+  const bool monocular = args.monocular;
+  input->options.read_images = [reader, colour, monocular](const io::FrameEntry& frame) {
+    io::FrameImages images = reader->Read(frame.index, colour);
+    if (monocular) images.right = images.depth = cv::Mat();
+    return images;
+  };
+}
+
+RunInput ReadInput(const RunArgs& args) {
+  const std::string& kind = args.dataset.at(0);
+  const std::string& path = args.dataset.at(1);
+  RunInput input;
+  if (kind == "camera" || kind == "kinect") {
+    SetUpLive(args, kind, path, &input);
+    return input;
+  }
+  if (!args.topics.empty() && kind != "rosbag") ThrowInput("--topics: for --dataset rosbag");
+  if (kind == "rosbag") {
+    SetUpRosbag(args, path, &input);
+  } else if (kind == "video") {
+    input.settings = io::LoadOrbSlamSettings(args.settings, io::SensorType::kMonocular);
+    SetUpVideo(args, path, &input.sequence, &input.options);
+    input.format_name = "video";
+  } else {
+    const auto format = io::ParseDatasetFormat(kind);
+    if (!format || *format == io::DatasetFormat::kAuto) {
+      ThrowInput(
+          "--dataset: unknown format '{}' (tum, kitti, euroc, folder, video, rosbag, camera, "
+          "kinect)",
+          kind);
+    }
+    // The settings are read first: an image folder takes its frame rate from Camera.fps.
+    io::DatasetOptions dataset_options;
+    dataset_options.format = input.format = *format;
+    dataset_options.monocular = args.monocular;
+    if (*format == io::DatasetFormat::kImageFolder) {
+      input.settings = io::LoadOrbSlamSettings(args.settings, io::SensorType::kMonocular);
+      dataset_options.image_folder_rate_hz = args.rate_hz > 0 ? args.rate_hz : input.settings.fps;
+      input.sequence = io::ReadDataset(path, dataset_options);
+    } else {
+      input.sequence = io::ReadDataset(path, dataset_options);
+      input.settings = io::LoadOrbSlamSettings(args.settings, input.sequence.sensor);
+    }
+  }
+  if (input.sequence.empty()) ThrowInFile(path, "data set has no frames");
+  SetImageSize(input.sequence, args.settings, &input.settings, &input.options);
+  return input;
+}
+
+void Run(const RunArgs& args, bool queue_given) {
+  RunInput input = ReadInput(args);
+  const io::Sequence& sequence = input.sequence;
+  runner::RunOptions& options = input.options;
+  const io::OrbSlamSettings& settings = input.settings;
   std::unique_ptr<runner::MaskSource> masks =
       runner::MakeMaskSource(MakeMaskOptions(args), sequence);
   if (!args.mask_damage.empty()) {
@@ -355,18 +468,22 @@ void Run(const RunArgs& args) {
   options.realtime = args.realtime;
   options.segment_every = ParseSegmentEvery(args.segment_every, args.deterministic);
   options.progress = !args.quiet;
-  options.queue_capacity = args.queue;
+  // A live source keeps few frames waiting: each one is a frame of latency (default 2).
+  options.queue_capacity = input.live && !queue_given ? 2 : args.queue;
   // RGB-D colour images go to the tracker in colour, converted to grey by Camera.RGB as ORB-SLAM2
   // does; the grey KITTI and EuRoC images are loaded grey.
   options.colour =
       sequence.sensor == io::SensorType::kRgbD ? io::ColourMode::kColour : io::ColourMode::kGrey;
   options.depth_factor = settings.depth_map_factor;
-  SetImageSize(sequence, args.settings, &settings, &options);
+  if (input.live) {
+    options.image_size = cv::Size(settings.camera.width, settings.camera.height);
+    options.image_size_source = args.settings;
+  }
 
   runner::RunDescription description;
   description.dataset_path = sequence.root;
-  description.format = *format;
-  if (video) description.format_name = "video";
+  description.format = input.format;
+  description.format_name = input.format_name;
   description.sensor = sequence.sensor;
   description.settings_path = args.settings;
   description.settings = settings;
@@ -375,10 +492,10 @@ void Run(const RunArgs& args) {
   description.deterministic = args.deterministic;
   description.deterministic_mapping_frames = args.deterministic_mapping_frames;
   description.deterministic_mapping_ms = args.deterministic_mapping_ms;
-  description.realtime = args.realtime;
-  spdlog::info("{}: {} frames ({}), masks: {}; OpenBLAS kernels: {}", sequence.root,
-               sequence.size(), io::ToString(sequence.sensor), description.mask_source,
-               net::DescribeOpenBlasCore());
+  description.realtime = args.realtime || input.live != nullptr;
+  spdlog::info("{}: {} ({}), masks: {}; OpenBLAS kernels: {}", sequence.root,
+               input.live ? std::string("live") : fmt::format("{} frames", sequence.size()),
+               io::ToString(sequence.sensor), description.mask_source, net::DescribeOpenBlasCore());
 
   runner::CheckGroundTruth(sequence);
   const std::string out = args.out.empty() ? "run_" + sequence.name : args.out;
@@ -397,7 +514,8 @@ void Run(const RunArgs& args) {
     options.stop = signals.flag();
     live = MakeViewer(args, sequence, signals.flag());
     options.observer = live.get();
-    result = runner::RunSequence(sequence, *tracker, *masks, options);
+    result = input.live ? runner::RunLive(*input.live, *tracker, *masks, options)
+                        : runner::RunSequence(sequence, *tracker, *masks, options);
     signal = signals.received();
   }
   if (result.end == runner::RunEnd::kInterrupted) {
@@ -458,8 +576,11 @@ void AddRunCommand(CLI::App& app) {
       "summary with timings, and the ATE when the data set has ground truth (docs/RUNNING.md)");
   command
       ->add_option("--dataset", args->dataset,
-                   "FORMAT PATH: tum, kitti, euroc or folder, and "
-                   "the data-set folder; or video and a video file (monocular)")
+                   "FORMAT PATH: tum, kitti, euroc or folder, and the data-set folder; video "
+                   "and a video file (monocular); rosbag and a ROS 1 bag (with --topics); "
+                   "camera and a V4L2 device (/dev/video0 or 0; two, comma-separated: stereo); "
+                   "kinect and a Kinect v1's index (0: the first). Live sources run in real "
+                   "time, dropping the frames tracking has no time for; Ctrl-C ends them")
       ->expected(2)
       ->required();
   command->add_option("--settings", args->settings, "ORB-SLAM2 settings YAML (configs/*.yaml)")
@@ -514,7 +635,17 @@ void AddRunCommand(CLI::App& app) {
       "--rate", args->rate_hz,
       "folder: frames per second of the images (default: the settings' Camera.fps); "
       "video: frame k at k / rate seconds (default: the container's times)");
-  command->add_option("--queue", args->queue, "Frames loaded ahead of tracking")
+  command->add_flag("--side-by-side", args->side_by_side,
+                    "camera: one device whose frames hold the left and right images side by "
+                    "side (stereo; the settings' Camera.width is one half's)");
+  command->add_option("--topics", args->topics,
+                      "rosbag: the sensor_msgs/Image topics, comma-separated: one (monocular), "
+                      "colour and depth (RGB-D: depth 16UC1 in mm or 32FC1 in m) or left and "
+                      "right (stereo)");
+  command
+      ->add_option("--queue", args->queue,
+                   "Frames loaded ahead of tracking; live sources: frames waiting for "
+                   "tracking, beyond which the oldest are dropped (default 2 there)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   command->add_flag("--realtime", args->realtime,
@@ -643,7 +774,7 @@ void AddRunCommand(CLI::App& app) {
   command->callback([args, command] {
     args->viewer_on = command->count("--viewer") > 0;
     if (args->quiet) spdlog::set_level(std::max(spdlog::get_level(), spdlog::level::warn));
-    Run(*args);
+    Run(*args, command->count("--queue") > 0);
   });
 }
 

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <exception>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -26,6 +27,9 @@ namespace moslam::runner {
 struct LoadedFrame {
   int index = 0;                          // FrameEntry::index
   const io::FrameEntry* entry = nullptr;  // the sequence's entry (it outlives the run)
+  // A live frame (live_capture.h) has no sequence to point into: it owns its entry, and `entry`
+  // points at it (a shared_ptr, so that moving the frame keeps `entry` valid).
+  std::shared_ptr<const io::FrameEntry> owned_entry;
   slam::FrameInput input;
   double load_ms = 0.0;        // reading and decoding the images
   double mask_ms = 0.0;        // computing or reading the mask (all of it)

@@ -302,6 +302,13 @@ nlohmann::json SummaryJson(const RunResult& result, const RunDescription& d,
                                      {"ms_per_observation", d.deterministic_mapping_ms}};
   }
   if (!d.format_name.empty()) json["dataset"]["format"] = d.format_name;
+  // A live source: what it delivered and what tracking had no time for (RunResult::live).
+  json["dropped"] = result.live ? result.live->dropped : 0;
+  if (result.live) {
+    json["live"] = {{"captured", result.live->captured},
+                    {"dropped", result.live->dropped},
+                    {"max_queued", result.live->max_queued}};
+  }
   json["ate"] = ate ? ate->json : nlohmann::json(nullptr);
   // How the run ended: "completed", or "failed" / "interrupted" with why; the counts above are
   // those of the frames tracked until then.
@@ -323,6 +330,10 @@ std::string FormatSummary(const RunResult& result, const RunDescription& d,
       counts.relocalized > 0 ? fmt::format(", {} relocalized", counts.relocalized) : std::string(),
       counts.recovered > 0 ? fmt::format(", {} recovered", counts.recovered) : std::string(),
       result.skipped > 0 ? fmt::format(", {} skipped", result.skipped) : std::string());
+  if (result.live) {
+    text += fmt::format("live         {} captured, {} dropped while tracking was busy\n",
+                        result.live->captured, result.live->dropped);
+  }
   text += fmt::format("map          {} keyframes, {} map points\n", result.map.keyframes,
                       result.map.map_points);
   text += fmt::format("masks        {}\n", d.mask_source);

@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "moslam/runner/live_capture.h"
 #include "moslam/runner/segment_schedule.h"
 #include "moslam/runner/segmentation_stage.h"
 #include "moslam/util/atomic_file.h"
@@ -190,6 +191,16 @@ bool StopRequested(const RunOptions& options) {
   return options.stop != nullptr && options.stop->load() != 0;
 }
 
+// Where the segmentation stages take their frames from: the loader of a sequence or the capture
+// thread of a live source.
+struct Upstream {
+  SegmentationStage::Upstream next;
+  SegmentationStage::StopUpstream stop;
+  size_t first = 0;                       // the index of the first frame (--segment-every)
+  std::optional<double> pace_from_stamp;  // --realtime: the first frame's stamp; nullopt: no pacing
+  SegmentScheduleOptions schedule;        // --segment-every, with the pace when there is one
+};
+
 SegmentScheduleOptions ScheduleOptions(const RunOptions& options, const io::Sequence& sequence,
                                        size_t first, size_t last) {
   SegmentScheduleOptions schedule;
@@ -206,29 +217,43 @@ SegmentScheduleOptions ScheduleOptions(const RunOptions& options, const io::Sequ
   return schedule;
 }
 
-// Frames result->first..last through the tracker, loaded and segmented in threads of their own;
-// returns when the range is done, when RunOptions::stop is set, or by throwing what a stage or
-// the tracker threw, after both threads have stopped.
-void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& masks,
+FrameRecord TrackOne(Tracker& tracker, const LoadedFrame& frame, const RunOptions& options) {
+  FrameRecord record;
+  record.index = frame.index;
+  record.timestamp = frame.input.timestamp;
+  record.mask_ms = frame.mask_ms;
+  record.network_ms = frame.network_ms;
+  record.crf_ms = frame.crf_ms;
+  record.mask_fraction = frame.mask_fraction;
+  record.segmented = frame.segment;
+  record.report = TrackFrame(tracker, frame);
+  if (!options.keyframe_mask_folder.empty() && !record.report.keyframe_mask.empty()) {
+    WriteKeyFrameMask(options.keyframe_mask_folder, record.timestamp, record.report.keyframe_mask);
+  }
+  record.report.keyframe_mask.release();
+  record.rss_mb = static_cast<double>(ResidentSetBytes()) / (1 << 20);
+  spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,
+                record.timestamp, StateName(record.report.state), record.report.num_features,
+                record.report.num_inliers, record.report.times.total_ms);
+  return record;
+}
+
+// The frames of `upstream` through the tracker, segmented in threads of their own; returns when
+// the upstream ends, when RunOptions::stop is set, or by throwing what a stage or the tracker
+// threw, after the stage threads have stopped.
+void TrackStream(const Upstream& upstream, Tracker& tracker, MaskSource& masks,
                  const RunOptions& options, Clock::time_point start, Progress* progress,
                  RunResult* result) {
-  // Destroyed before Finish(), stage first: stops and joins both threads also when Track(),
-  // segmentation or loading threw.
-  FrameLoader loader(
-      sequence, result->first, result->last,
-      [&options](const io::FrameEntry& f) { return LoadImages(f, options); },
-      options.queue_capacity);
   // A network source gets two stages, network then refinement (the CRF), so that on two
   // cores the CRF of frame k runs beside the network of frame k+1. The first stage decides
   // whether the source runs on a frame (--segment-every) and the frame carries the decision.
-  SegmentSchedule schedule(ScheduleOptions(options, sequence, result->first, result->last));
-  const size_t first = result->first;
-  const auto decide = [&schedule, first](LoadedFrame& f) {
+  SegmentSchedule schedule(upstream.schedule);
+  const auto decide = [&schedule, first = upstream.first](LoadedFrame& f) {
     f.segment = schedule.Due(static_cast<size_t>(f.index) - first);
   };
   std::optional<SegmentationStage> network_stage;
   if (masks.Pipelined()) {
-    network_stage.emplace([&loader] { return loader.Next(); }, [&loader] { loader.Stop(); },
+    network_stage.emplace(upstream.next, upstream.stop,
                           [&masks, &decide, &schedule](LoadedFrame& f) {
                             decide(f);
                             if (!f.segment) return;
@@ -238,8 +263,8 @@ void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& mas
                           options.queue_capacity);
   }
   SegmentationStage stage(
-      [&] { return network_stage ? network_stage->Next() : loader.Next(); },
-      [&] { network_stage ? network_stage->Stop() : loader.Stop(); },
+      [&] { return network_stage ? network_stage->Next() : upstream.next(); },
+      [&] { network_stage ? network_stage->Stop() : upstream.stop(); },
       [&masks, &decide, &schedule, pipelined = masks.Pipelined()](LoadedFrame& f) {
         if (!pipelined) decide(f);
         if (!f.segment) return;
@@ -248,7 +273,6 @@ void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& mas
         schedule.AddSegmentationMs(pipelined ? 1 : 0, f.mask_ms - before);
       },
       options.queue_capacity);
-  const double first_stamp = sequence.frames[result->first].timestamp;
   while (std::optional<LoadedFrame> frame = stage.Next()) {
     if (StopRequested(options)) {
       result->end = RunEnd::kInterrupted;
@@ -257,39 +281,61 @@ void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& mas
     }
     // Skipped frames are loaded (the loader reads the range in order) but never tracked.
     if (Skipped(options, static_cast<size_t>(frame->index))) continue;
-    if (options.realtime) {
+    if (upstream.pace_from_stamp) {
       // Pacing is the one legitimate sleep: a frame is not given to the tracker before its
       // time on the data set's clock, counted from the first frame.
       const auto at =
-          start + std::chrono::duration_cast<Clock::duration>(
-                      std::chrono::duration<double>(frame->input.timestamp - first_stamp));
+          start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                      frame->input.timestamp - *upstream.pace_from_stamp));
       std::this_thread::sleep_until(at);
     }
-    FrameRecord record;
-    record.index = frame->index;
-    record.timestamp = frame->input.timestamp;
-    record.mask_ms = frame->mask_ms;
-    record.network_ms = frame->network_ms;
-    record.crf_ms = frame->crf_ms;
-    record.mask_fraction = frame->mask_fraction;
-    record.segmented = frame->segment;
-    record.report = TrackFrame(tracker, *frame);
-    schedule.AddTrackingMs(record.report.times.total_ms);
-    if (!options.keyframe_mask_folder.empty() && !record.report.keyframe_mask.empty()) {
-      WriteKeyFrameMask(options.keyframe_mask_folder, record.timestamp,
-                        record.report.keyframe_mask);
-    }
-    record.report.keyframe_mask.release();
-    record.rss_mb = static_cast<double>(ResidentSetBytes()) / (1 << 20);
-    spdlog::debug("frame {} ({:.6f}): {}, {} features, {} inliers, {:.1f} ms", record.index,
-                  record.timestamp, StateName(record.report.state), record.report.num_features,
-                  record.report.num_inliers, record.report.times.total_ms);
-    result->frames.push_back(std::move(record));
+    result->frames.push_back(TrackOne(tracker, *frame, options));
+    schedule.AddTrackingMs(result->frames.back().report.times.total_ms);
     if (options.observer != nullptr) {
       options.observer->OnFrame(result->frames.back(), frame->input, tracker);
     }
     if (progress != nullptr) progress->Update(result->frames.size());
   }
+}
+
+// Frames result->first..last of the sequence, loaded in a thread of their own.
+void TrackFrames(const io::Sequence& sequence, Tracker& tracker, MaskSource& masks,
+                 const RunOptions& options, Clock::time_point start, Progress* progress,
+                 RunResult* result) {
+  // Outlives TrackStream's stages, which stop it when they stop; its destructor joins the
+  // thread also when Track(), segmentation or loading threw.
+  FrameLoader loader(
+      sequence, result->first, result->last,
+      [&options](const io::FrameEntry& f) { return LoadImages(f, options); },
+      options.queue_capacity);
+  Upstream upstream;
+  upstream.next = [&loader] { return loader.Next(); };
+  upstream.stop = [&loader] { loader.Stop(); };
+  upstream.first = result->first;
+  if (options.realtime) upstream.pace_from_stamp = sequence.frames[result->first].timestamp;
+  upstream.schedule = ScheduleOptions(options, sequence, result->first, result->last);
+  TrackStream(upstream, tracker, masks, options, start, progress, result);
+}
+
+// The end of every run: the tracker finished (local mapping drained, the map saved), an error
+// in Finish() recorded unless the run had failed already, the trajectories collected.
+void FinishRun(Tracker& tracker, Clock::time_point start, RunResult* result) {
+  try {
+    tracker.Finish();  // saving a map (--save-map) may fail on a full disk
+  } catch (const std::exception& e) {
+    if (result->end == RunEnd::kFailed) {
+      spdlog::error("finishing the tracker after the error: {}", e.what());
+    } else {
+      result->end = RunEnd::kFailed;
+      result->end_message = e.what();
+      result->error = std::current_exception();
+    }
+  }
+  result->wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  result->camera = tracker.CameraTrajectory();
+  result->keyframes = tracker.KeyFrameTrajectory();
+  result->graph = FinalKeyFrameGraph(tracker, result->keyframes);
+  result->map = tracker.Summary();
 }
 
 }  // namespace
@@ -319,22 +365,64 @@ RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource
     result.error = std::current_exception();
   }
   if (progress) progress->Finish();
-  try {
-    tracker.Finish();  // saving a map (--save-map) may fail on a full disk
-  } catch (const std::exception& e) {
-    if (result.end == RunEnd::kFailed) {
-      spdlog::error("finishing the tracker after the error: {}", e.what());
-    } else {
-      result.end = RunEnd::kFailed;
-      result.end_message = e.what();
-      result.error = std::current_exception();
-    }
+  FinishRun(tracker, start, &result);
+  return result;
+}
+
+RunResult RunLive(io::LiveSource& source, Tracker& tracker, MaskSource& masks,
+                  const RunOptions& options) {
+  options.Check();
+  if (options.frames.first != 0 || options.frames.last || options.skip || options.realtime) {
+    ThrowInput(
+        "{}: --frames, --skip-frames and --realtime are for recorded data; a live source runs "
+        "in real time from its first frame",
+        source.name());
   }
-  result.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
-  result.camera = tracker.CameraTrajectory();
-  result.keyframes = tracker.KeyFrameTrajectory();
-  result.graph = FinalKeyFrameGraph(tracker, result.keyframes);
-  result.map = tracker.Summary();
+  LiveCaptureOptions capture_options;
+  capture_options.queue_capacity = options.queue_capacity;
+  capture_options.colour = options.colour;
+  capture_options.image_size = options.image_size;
+  capture_options.stop = options.stop;
+  RunResult result;
+  result.live.emplace();
+  const auto start = Clock::now();
+  std::optional<Progress> progress;
+  // A live run has no known length: the progress line counts frames and their rate.
+  if (options.progress) progress.emplace("tracking", 0, 2.0, "frames");
+  try {
+    LiveCapture capture(source, capture_options);
+    Upstream upstream;
+    upstream.next = [&capture] { return capture.Next(); };
+    upstream.stop = [&capture] { capture.Stop(); };
+    // A live source's interval is not known ahead: --segment-every auto keeps up with tracking.
+    upstream.schedule.every = options.segment_every;
+    try {
+      TrackStream(upstream, tracker, masks, options, start, progress ? &*progress : nullptr,
+                  &result);
+    } catch (...) {
+      *result.live = capture.counts();
+      throw;
+    }
+    *result.live = capture.counts();
+    if (result.end == RunEnd::kCompleted && capture.stopped_by_flag()) {
+      result.end = RunEnd::kInterrupted;
+      result.end_message = fmt::format("stopped after frame {}", result.live->captured);
+    }
+  } catch (const std::exception& e) {
+    result.end = RunEnd::kFailed;
+    result.end_message = e.what();
+    result.error = std::current_exception();
+  }
+  if (progress) progress->Finish();
+  result.last = result.live->captured;
+  if (result.live->dropped > 0) {
+    spdlog::warn("{}: {} of {} frames dropped while tracking was busy (at most {} waited)",
+                 source.name(), result.live->dropped, result.live->captured,
+                 options.queue_capacity);
+  } else {
+    spdlog::info("{}: {} frames captured, none dropped", source.name(), result.live->captured);
+  }
+  FinishRun(tracker, start, &result);
   return result;
 }
 

@@ -15,9 +15,11 @@
 
 #include "moslam/eval/trajectory.h"
 #include "moslam/io/image.h"
+#include "moslam/io/live_source.h"
 #include "moslam/io/sequence.h"
 #include "moslam/runner/frame_loader.h"
 #include "moslam/runner/keyframe_graph.h"
+#include "moslam/runner/live_capture.h"
 #include "moslam/runner/mask_source.h"
 #include "moslam/runner/tracker.h"
 
@@ -119,6 +121,9 @@ struct RunResult {
   RunEnd end = RunEnd::kCompleted;
   std::string end_message;   // kFailed: the error's message; kInterrupted: the stop's value
   std::exception_ptr error;  // kFailed: the exception, to rethrow once the outputs are written
+  // A live run (RunLive): frames captured and dropped; `first`..`last` is then 0..captured, and
+  // a frame's index is its place in capture order, so the gaps in frames.csv are the drops.
+  std::optional<LiveCounts> live;
 };
 
 // Rethrows the exception that ended a failed run; does nothing for any other end.
@@ -144,5 +149,14 @@ LoadedFrame LoadFrame(const io::FrameEntry& frame, MaskSource& masks, const RunO
 // exception, so that the caller writes what was done and then fails (RethrowFailure).
 RunResult RunSequence(const io::Sequence& sequence, Tracker& tracker, MaskSource& masks,
                       const RunOptions& options);
+
+// Runs the frames of a live source through `tracker` as they arrive (live_capture.h): frames that
+// come while tracking (or segmentation) is busy and the queue (RunOptions::queue_capacity) is
+// full are dropped, the oldest first, and counted (RunResult::live, the log). Ends when the
+// source ends, on RunOptions::stop (RunEnd::kInterrupted; the frames still queued are not
+// tracked) or on an error (RunEnd::kFailed, as RunSequence). RunOptions::frames, skip and
+// realtime are for recorded data: InputError. RunOptions::read_images is not used.
+RunResult RunLive(io::LiveSource& source, Tracker& tracker, MaskSource& masks,
+                  const RunOptions& options);
 
 }  // namespace moslam::runner
