@@ -16,6 +16,9 @@ PACKAGES=(
   # the live viewer (src/moslam/viewer): HTTP/WebSocket server (header only, on standalone asio)
   # and three.js served from its installed files
   libwebsocketpp-dev libasio-dev libjs-three
+  # moslam run --dataset rosbag|kinect (src/moslam/sensors): ROS 1 bags with their image messages,
+  # and the Kinect v1; pluginlib-dev is what librosbag-storage-dev's headers include
+  librosbag-dev libsensor-msgs-dev pluginlib-dev libfreenect-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # the bad-input corpus (tools/bad_input_corpus, docs/ROBUSTNESS.md): images and .npy files
