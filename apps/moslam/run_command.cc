@@ -55,6 +55,7 @@ struct RunArgs {
   std::string vocabulary = "default";  // FILE, "default" (the shipped one) or "none"
   double rate_hz = 0.0;
   bool side_by_side = false;  // --dataset camera: stereo halves of one device's frames
+  bool live = false;          // play a recorded data set as a live source (io::ReplaySource)
   std::string topics;         // --dataset rosbag: image topics, comma-separated
   size_t queue = 4;
   bool realtime = false;
@@ -354,6 +355,7 @@ struct RunInput {
 // with the size the settings' intrinsics are for.
 void SetUpLive(const RunArgs& args, const std::string& kind, const std::string& device,
                RunInput* input) {
+  if (args.live) ThrowInput("--live: for recorded data ({} is live anyway)", kind);
   RefuseFileMasks(args, fmt::format("a live source ({})", device));
   io::SensorType sensor = io::SensorType::kRgbD;
   io::CameraOptions camera;
@@ -447,6 +449,19 @@ RunInput ReadInput(const RunArgs& args) {
   }
   if (input.sequence.empty()) ThrowInFile(path, "data set has no frames");
   SetImageSize(input.sequence, args.settings, &input.settings, &input.options);
+  if (args.live) {
+    // Loaded as the loader would, converted by the capture thread as a camera's frames are.
+    io::ReplaySource::Load load = input.options.read_images;
+    if (!load) {
+      const io::ColourMode colour = input.sequence.sensor == io::SensorType::kRgbD
+                                        ? io::ColourMode::kColour
+                                        : io::ColourMode::kGrey;
+      load = [colour, factor = input.settings.depth_map_factor](const io::FrameEntry& frame) {
+        return io::LoadFrameImages(frame, colour, factor);
+      };
+    }
+    input.live = std::make_unique<io::ReplaySource>(input.sequence, std::move(load));
+  }
   return input;
 }
 
@@ -638,6 +653,10 @@ void AddRunCommand(CLI::App& app) {
   command->add_flag("--side-by-side", args->side_by_side,
                     "camera: one device whose frames hold the left and right images side by "
                     "side (stereo; the settings' Camera.width is one half's)");
+  command->add_flag("--live", args->live,
+                    "Play a recorded data set as a live camera: each frame delivered at its "
+                    "timestamp, frames tracking has no time for dropped and counted (as "
+                    "--dataset camera; to see how a machine keeps up in real time)");
   command->add_option("--topics", args->topics,
                       "rosbag: the sensor_msgs/Image topics, comma-separated: one (monocular), "
                       "colour and depth (RGB-D: depth 16UC1 in mm or 32FC1 in m) or left and "

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -48,6 +49,29 @@ class LiveClock {
  private:
   std::chrono::steady_clock::time_point start_;
   double start_unix_s_ = 0.0;
+};
+
+// A recorded sequence played as a live source (`moslam run --live`): frame k is delivered at its
+// timestamp counted from the first frame (divided by `speed`), whether or not the last one was
+// taken, as a camera delivers; frames keep their stamps, so the ATE against the sequence's ground
+// truth still applies. `load` reads a frame's images (in the capture thread); a frame whose
+// loading is late is delivered late, not skipped. The sleep is the source's own pacing.
+class ReplaySource : public LiveSource {
+ public:
+  using Load = std::function<FrameImages(const FrameEntry&)>;
+  // Keeps a copy of `sequence` (its frame list, not images). speed > 0.
+  ReplaySource(Sequence sequence, Load load, double speed = 1.0);
+  std::optional<LiveFrame> Grab() override;
+  SensorType sensor() const override { return sequence_.sensor; }
+  std::string name() const override { return sequence_.root; }
+  cv::Size image_size() const override { return {}; }
+
+ private:
+  const Sequence sequence_;
+  Load load_;
+  double speed_ = 1.0;
+  size_t next_ = 0;
+  std::chrono::steady_clock::time_point start_;
 };
 
 }  // namespace moslam::io

@@ -389,6 +389,9 @@ RunResult RunLive(io::LiveSource& source, Tracker& tracker, MaskSource& masks,
   std::optional<Progress> progress;
   // A live run has no known length: the progress line counts frames and their rate.
   if (options.progress) progress.emplace("tracking", 0, 2.0, "frames");
+  // Said once the stop flag is in place (moslam run installs its handlers before calling).
+  spdlog::info("{}: live, at most {} frames waiting for tracking; Ctrl-C ends the run",
+               source.name(), options.queue_capacity);
   try {
     LiveCapture capture(source, capture_options);
     Upstream upstream;
