@@ -393,6 +393,9 @@ void SetUpLive(const RunArgs& args, const std::string& kind, const std::string& 
 void SetUpRosbag(const RunArgs& args, const std::string& path, RunInput* input) {
   RefuseFileMasks(args, fmt::format("a bag ({})", path));
   sensors::RosbagOptions bag;
+  if (args.topics.empty()) {
+    ThrowInput("--dataset rosbag {}: needs --topics (its image topics, comma-separated)", path);
+  }
   bag.topics = SplitList(args.topics, "--topics");
   bag.Check();
   auto reader = std::make_shared<sensors::RosbagReader>(path, bag);
