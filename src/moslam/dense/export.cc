@@ -67,6 +67,11 @@ RunInfo ReadRunInfo(const std::string& run_dir) {
       throw InputError(path + ": a " + (format == "video" ? "video" : "monocular") +
                        " run is monocular, it has no depth to fuse (RGB-D or stereo)");
     }
+    // Live sources keep no frames, and a bag's are read by sensors/, which dense/ does not use.
+    if (format == "camera" || format == "kinect" || format == "rosbag") {
+      throw InputError(path + ": a " + format + " run: its keyframes' depth is not in a data-set " +
+                       "folder (map export reads TUM, KITTI and EuRoC folders)");
+    }
     const auto parsed = io::ParseDatasetFormat(format);
     if (!parsed) throw InputError(path + ": unknown dataset.format '" + format + "'");
     info.format = *parsed;
