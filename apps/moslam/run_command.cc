@@ -453,6 +453,8 @@ RunInput ReadInput(const RunArgs& args) {
   if (input.sequence.empty()) ThrowInFile(path, "data set has no frames");
   SetImageSize(input.sequence, args.settings, &input.settings, &input.options);
   if (args.live) {
+    // A live frame carries no image file name for a mask file to be named after.
+    RefuseFileMasks(args, fmt::format("a data set played live ({})", path));
     // Loaded as the loader would, converted by the capture thread as a camera's frames are.
     io::ReplaySource::Load load = input.options.read_images;
     if (!load) {

@@ -37,10 +37,13 @@ def test_absent_kinect_is_named(moslam_bin, tmp_path):
     assert done.returncode == 2 and "kinect:9: " in done.stderr, done.stderr
 
 
-def test_file_masks_and_recorded_options_are_refused_live(moslam_bin, tmp_path):
+def test_file_masks_are_refused_live(sequence, moslam_bin, tmp_path):
     done = run(moslam_bin, tmp_path / "a", "--dataset", "camera", "/dev/null", "--mask-source",
                "synth-gt")
     assert done.returncode == 2 and "needs image files" in done.stderr, done.stderr
+    done = run(moslam_bin, tmp_path / "b", "--dataset", "tum", sequence, "--live",
+               "--mask-source", "synth-gt")
+    assert done.returncode == 2 and "a data set played live" in done.stderr, done.stderr
 
 
 def test_bad_bags_are_named(moslam_bin, tmp_path):
