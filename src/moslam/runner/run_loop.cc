@@ -253,14 +253,15 @@ void TrackStream(const Upstream& upstream, Tracker& tracker, MaskSource& masks,
   };
   std::optional<SegmentationStage> network_stage;
   if (masks.Pipelined()) {
-    network_stage.emplace(upstream.next, upstream.stop,
-                          [&masks, &decide, &schedule](LoadedFrame& f) {
-                            decide(f);
-                            if (!f.segment) return;
-                            PredictFrame(masks, &f);
-                            schedule.AddSegmentationMs(0, f.mask_ms);
-                          },
-                          options.queue_capacity);
+    network_stage.emplace(
+        upstream.next, upstream.stop,
+        [&masks, &decide, &schedule](LoadedFrame& f) {
+          decide(f);
+          if (!f.segment) return;
+          PredictFrame(masks, &f);
+          schedule.AddSegmentationMs(0, f.mask_ms);
+        },
+        options.queue_capacity);
   }
   SegmentationStage stage(
       [&] { return network_stage ? network_stage->Next() : upstream.next(); },
