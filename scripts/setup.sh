@@ -10,6 +10,8 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcli11-dev
   libceres-dev libcereal-dev liboctomap-dev
   libopencv-contrib-dev libtorch-dev
+  # net/'s fused 1x1 convolutions: oneDNN's headers (libtorch already links its library)
+  libdnnl-dev
   # the BLAS libtorch and CHOLMOD get through Debian's alternatives (ATLAS otherwise; README)
   libopenblas0-openmp
   libosmesa6-dev

@@ -90,8 +90,7 @@ class BlockImpl : public torch::nn::Module {
     torch::Tensor y = x;
     for (size_t i = 0; i < convs_.size(); ++i) {
       torch::nn::Conv2d& conv = convs_[i];
-      y = ApplyConv(*conv, y);
-      if (relu_[i]) y = torch::hardtanh_(y, 0.0, 6.0);  // ReLU6; autograd keeps the result
+      y = ApplyConv(*conv, y, relu_[i] ? Activation::kRelu6 : Activation::kNone);
     }
     return residual_ ? y + x : y;
   }
@@ -153,12 +152,25 @@ torch::Tensor Pointwise(const torch::Tensor& x, const torch::Tensor& weight,
   return y.view({n, h, w, weight.size(0)}).permute({0, 3, 1, 2});
 }
 
-torch::Tensor ApplyConv(torch::nn::Conv2dImpl& conv, const torch::Tensor& x) {
+torch::Tensor ApplyConv(torch::nn::Conv2dImpl& conv, const torch::Tensor& x,
+                        Activation activation) {
   const auto& o = conv.options;
   const bool pointwise = o.kernel_size()->at(0) == 1 && o.kernel_size()->at(1) == 1 &&
                          o.stride()->at(0) == 1 && o.stride()->at(1) == 1 && o.groups() == 1 &&
                          conv.bias.defined();
-  return pointwise ? Pointwise(x, conv.weight, conv.bias) : conv.forward(x);
+  if (pointwise && FusedPointwiseApplies(x, conv.weight, conv.bias)) {
+    return FusedPointwise(x, conv.weight, conv.bias, activation);
+  }
+  torch::Tensor y = pointwise ? Pointwise(x, conv.weight, conv.bias) : conv.forward(x);
+  switch (activation) {
+    case Activation::kNone:
+      return y;
+    case Activation::kRelu:
+      return torch::relu(y);
+    case Activation::kRelu6:
+      return torch::hardtanh_(y, 0.0, 6.0);  // in place; autograd keeps the result
+  }
+  return y;
 }
 
 void BackboneOptions::Check() const {

@@ -17,6 +17,8 @@
 
 #include <torch/torch.h>
 
+#include "moslam/net/fused_pointwise.h"
+
 namespace moslam::net {
 
 struct BackboneOptions {
@@ -72,8 +74,11 @@ TORCH_MODULE(MobileNetV2);
 // (no copy when x is channels-last), avoiding libtorch 1.13's single-threaded im2col path.
 torch::Tensor Pointwise(const torch::Tensor& x, const torch::Tensor& weight,
                         const torch::Tensor& bias);
-// conv(x), through Pointwise when conv is such a 1x1 convolution.
-torch::Tensor ApplyConv(torch::nn::Conv2dImpl& conv, const torch::Tensor& x);
+// activation(conv(x)). A 1x1 convolution (stride 1, one group, with bias) runs as one oneDNN
+// matmul with the bias and activation fused where no gradient is wanted (FusedPointwise), and
+// through Pointwise otherwise; any other convolution through libtorch.
+torch::Tensor ApplyConv(torch::nn::Conv2dImpl& conv, const torch::Tensor& x,
+                        Activation activation = Activation::kNone);
 
 void LoadImageNetWeights(const std::string& torchscript_path, MobileNetV2& backbone);
 

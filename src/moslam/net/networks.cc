@@ -235,25 +235,26 @@ SegmenterOutput SegmenterNetImpl::forward(torch::Tensor x) {
                                      : backbone_->forward(x);
   std::vector<torch::Tensor> branches;
   branches.reserve(aspp_->size() + 1);
-  // The 1x1 convs go through ApplyConv (a GEMM instead of libtorch's single-threaded im2col
-  // path); the module layout is unchanged, so older model files load as they were.
+  // The 1x1 convs go through ApplyConv (one oneDNN matmul with the ReLU fused at inference, a
+  // GEMM in training: not libtorch's single-threaded im2col path); the module layout is
+  // unchanged, so older model files load as they were.
   for (const auto& branch : *aspp_) {
     branches.push_back(
-        torch::relu(ApplyConv(ConvAt(*branch->as<torch::nn::Sequential>(), 0), features)));
+        ApplyConv(ConvAt(*branch->as<torch::nn::Sequential>(), 0), features, Activation::kRelu));
   }
   // Image pooling: one vector per image, broadcast over the map.
   branches.push_back(image_pool_->forward(features).expand(
       {features.size(0), config_.head_channels, features.size(2), features.size(3)}));
   SegmenterOutput out;
-  torch::Tensor head = torch::relu(ApplyConv(ConvAt(*project_, 0), torch::cat(branches, 1)));
+  torch::Tensor head = ApplyConv(ConvAt(*project_, 0), torch::cat(branches, 1), Activation::kRelu);
   if (config_.decoder_block > 0) {
     head = UpsampleBilinear(head, low_level.size(2), low_level.size(3));
-    const torch::Tensor low = torch::relu(ApplyConv(ConvAt(*low_level_, 0), low_level));
+    const torch::Tensor low = ApplyConv(ConvAt(*low_level_, 0), low_level, Activation::kRelu);
     // Depthwise convs are ~20x faster on the channels-last layout; cat may not keep it.
     const torch::Tensor both =
         torch::cat({head, low}, 1).contiguous(torch::MemoryFormat::ChannelsLast);
     head = torch::relu(ConvAt(*decoder_, 0).forward(both));
-    head = torch::relu(ApplyConv(ConvAt(*decoder_, 2), head));
+    head = ApplyConv(ConvAt(*decoder_, 2), head, Activation::kRelu);
   }
   out.logits = ApplyConv(*classify_, head);
   out.class_logits = ApplyConv(*aux_class_map_, features).mean({2, 3});

@@ -3,11 +3,11 @@
 #include <chrono>
 #include <cstring>
 #include <memory>
-#include <optional>
 
 #include <ATen/core/ivalue.h>
 #include <ATen/record_function.h>
 
+#include "moslam/net/fused_pointwise.h"
 #include "moslam/util/check.h"
 
 namespace moslam::net {
@@ -23,48 +23,62 @@ struct ThreadState {
 };
 thread_local ThreadState tls;
 
+// What the start callback reads from the inputs (valid only there: an operator's inputs may be
+// gone by its end) for the end callback, which multiplies it by the output's size.
 struct OpContext : at::ObserverContext {
   bool counted = false;
+  OpKind kind = OpKind::kGemm;
+  double macs_per_output = 0.0;
   Clock::time_point start;
 };
 
 bool IsCounted(const char* name) {
   return std::strcmp(name, "aten::conv2d") == 0 || std::strcmp(name, "aten::addmm") == 0 ||
-         std::strcmp(name, "aten::mm") == 0;
+         std::strcmp(name, "aten::mm") == 0 || std::strcmp(name, kFusedPointwiseOp) == 0;
 }
 
-// The kind and multiply-adds of a finished operator from its inputs and output; nullopt when its
-// arguments are not the tensors expected (then it is not counted).
-std::optional<std::pair<OpKind, double>> Measure(const at::RecordFunction& fn) {
+const at::Tensor* TensorAt(c10::ArrayRef<const c10::IValue> inputs, size_t i, int64_t dim) {
+  if (inputs.size() <= i || !inputs[i].isTensor()) return nullptr;
+  const at::Tensor& t = inputs[i].toTensor();
+  return t.dim() == dim ? &t : nullptr;
+}
+
+// The kind and the multiply-adds per output element of an operator from its inputs; false when
+// they are not the tensors expected (then it is not counted).
+bool Classify(const at::RecordFunction& fn, OpContext* context) {
   const auto inputs = fn.inputs();
-  const auto& outputs = fn.outputs();
-  if (outputs.empty() || !outputs[0].isTensor()) return std::nullopt;
-  const at::Tensor& out = outputs[0].toTensor();
   if (std::strcmp(fn.name(), "aten::conv2d") == 0) {
-    if (inputs.size() < 2 || !inputs[0].isTensor() || !inputs[1].isTensor()) return std::nullopt;
-    const at::Tensor& x = inputs[0].toTensor();
-    const at::Tensor& w = inputs[1].toTensor();  // {out, in / groups, kh, kw}
-    if (w.dim() != 4 || x.dim() != 4) return std::nullopt;
-    const double per_output = static_cast<double>(w.size(1) * w.size(2) * w.size(3));
-    OpKind kind = OpKind::kDenseConv;
-    if (w.size(1) == 1 && x.size(1) > 1 && w.size(0) % x.size(1) == 0) {
-      kind = OpKind::kDepthwise;
-    } else if (w.size(2) == 1 && w.size(3) == 1) {
-      kind = OpKind::kPointwise;
+    const at::Tensor* x = TensorAt(inputs, 0, 4);
+    const at::Tensor* w = TensorAt(inputs, 1, 4);  // {out, in / groups, kh, kw}
+    if (x == nullptr || w == nullptr) return false;
+    context->macs_per_output = static_cast<double>(w->size(1) * w->size(2) * w->size(3));
+    context->kind = OpKind::kDenseConv;
+    if (w->size(1) == 1 && x->size(1) > 1 && w->size(0) % x->size(1) == 0) {
+      context->kind = OpKind::kDepthwise;
+    } else if (w->size(2) == 1 && w->size(3) == 1) {
+      context->kind = OpKind::kPointwise;
     }
-    return std::make_pair(kind, static_cast<double>(out.numel()) * per_output);
+    return true;
+  }
+  if (std::strcmp(fn.name(), kFusedPointwiseOp) == 0) {  // inputs x, weights {out, in}
+    const at::Tensor* w = TensorAt(inputs, 1, 2);
+    if (w == nullptr) return false;
+    context->kind = OpKind::kPointwise;
+    context->macs_per_output = static_cast<double>(w->size(1));
+    return true;
   }
   // addmm(bias, a, b) and mm(a, b): a is {m, k}, the output {m, n}.
-  const size_t a = std::strcmp(fn.name(), "aten::addmm") == 0 ? 1 : 0;
-  if (inputs.size() <= a || !inputs[a].isTensor()) return std::nullopt;
-  const at::Tensor& lhs = inputs[a].toTensor();
-  if (lhs.dim() != 2) return std::nullopt;
-  return std::make_pair(OpKind::kGemm, static_cast<double>(out.numel()) * lhs.size(1));
+  const at::Tensor* a = TensorAt(inputs, std::strcmp(fn.name(), "aten::addmm") == 0 ? 1 : 0, 2);
+  if (a == nullptr) return false;
+  context->kind = OpKind::kGemm;
+  context->macs_per_output = static_cast<double>(a->size(1));
+  return true;
 }
 
 std::unique_ptr<at::ObserverContext> OnStart(const at::RecordFunction& fn) {
   auto context = std::make_unique<OpContext>();
-  if (tls.count != nullptr && tls.depth == 0 && IsCounted(fn.name())) {
+  if (tls.count != nullptr && tls.depth == 0 && IsCounted(fn.name()) &&
+      Classify(fn, context.get())) {
     context->counted = true;
     ++tls.depth;
     context->start = Clock::now();
@@ -78,13 +92,12 @@ void OnEnd(const at::RecordFunction& fn, at::ObserverContext* base) {
   const double ms =
       std::chrono::duration<double, std::milli>(Clock::now() - context->start).count();
   --tls.depth;
-  if (tls.count == nullptr) return;
-  if (const auto measured = Measure(fn)) {
-    OpStats& stats = tls.count->by_kind[measured->first];
-    ++stats.calls;
-    stats.macs += measured->second;
-    stats.ms += ms;
-  }
+  const auto& outputs = fn.outputs();
+  if (tls.count == nullptr || outputs.empty() || !outputs[0].isTensor()) return;
+  OpStats& stats = tls.count->by_kind[context->kind];
+  ++stats.calls;
+  stats.macs += static_cast<double>(outputs[0].toTensor().numel()) * context->macs_per_output;
+  stats.ms += ms;
 }
 
 }  // namespace

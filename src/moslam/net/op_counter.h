@@ -16,8 +16,9 @@ namespace moslam::net {
 
 // Kinds of counted operators. A convolution's kind is read from its weight: 1x1 (pointwise),
 // one input channel per group and as many groups as input channels (depthwise), or any other
-// (dense, e.g. the 3x3 stem and the ASPP branches). aten::addmm / aten::mm are GEMMs: in these
-// networks the pointwise convolutions (mobilenet_v2.cc's Pointwise) and nothing else.
+// (dense, e.g. the 3x3 stem and the ASPP branches); FusedPointwise (fused_pointwise.h) is
+// pointwise. aten::addmm / aten::mm are GEMMs: in these networks the pointwise convolutions
+// that training runs (mobilenet_v2.cc's Pointwise) and nothing else.
 enum class OpKind { kPointwise, kDepthwise, kDenseConv, kGemm };
 const char* ToString(OpKind kind);
 

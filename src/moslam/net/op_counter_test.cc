@@ -1,5 +1,7 @@
 #include "moslam/net/op_counter.h"
 
+#include <optional>
+
 #include <gtest/gtest.h>
 #include <torch/torch.h>
 
@@ -63,37 +65,44 @@ TEST(OpCounter, StopsCountingWhenDestroyedAndCountsOnlyItsThread) {
   EXPECT_DOUBLE_EQ(counter.count().Total().macs, 2.0 * 4 * 6 * 6 * 36);
 }
 
-// The backbone's own layers, as its forward runs them on two intra-op threads: every 1x1
-// convolution with a bias goes to the GEMM (mobilenet_v2.cc's Pointwise), the 3x3 ones stay
-// convolutions, and the multiply-adds add up to the layers' analytic count (Sandler et al. 2018,
-// Table 2: the stem and blocks 1-4 on a 64 x 64 input).
+// The backbone's own layers as its forward runs them: at inference every 1x1 convolution with a
+// bias is one fused oneDNN matmul (fused_pointwise.h), in training a libtorch GEMM
+// (mobilenet_v2.cc's Pointwise); the 3x3 ones stay convolutions; and the multiply-adds add up to
+// the layers' analytic count (Sandler et al. 2018, Table 2: the stem and blocks 1-4 on a 64 x 64
+// input).
 TEST(OpCounter, SeesTheBackbonesLayersOnce) {
   torch::manual_seed(0);
   BackboneOptions options;
   options.last_block = 4;  // natural stride 8
   options.output_stride = 8;
   MobileNetV2 backbone(options);
-  backbone->eval();
-  c10::InferenceMode inference;
   const torch::Tensor x = torch::rand({1, 3, 64, 64});
-  OpCounter counter;
-  backbone->forward(x);
-  const OpCount& count = counter.count();
   // Pixels at strides 2, 4 and 8.
   const double p2 = 32 * 32, p4 = 16 * 16, p8 = 8 * 8;
   // Stem: 3x3 stride 2, 3 -> 32.
-  EXPECT_DOUBLE_EQ(count.by_kind.at(OpKind::kDenseConv).macs, p2 * 32 * 27);
+  const double dense = p2 * 32 * 27;
   // Depthwise 3x3 at each block's output resolution: block 1 (32 channels), block 2 (96,
   // stride 2), block 3 (144), block 4 (144, stride 2).
-  EXPECT_DOUBLE_EQ(count.by_kind.at(OpKind::kDepthwise).macs,
-                   9 * (p2 * 32 + p4 * 96 + p4 * 144 + p8 * 144));
+  const double depthwise = 9 * (p2 * 32 + p4 * 96 + p4 * 144 + p8 * 144);
   // 1x1: block 1 32 -> 16; block 2 16 -> 96, 96 -> 24; block 3 24 -> 144, 144 -> 24; block 4
   // 24 -> 144 (before its stride), 144 -> 32.
-  EXPECT_DOUBLE_EQ(count.by_kind.at(OpKind::kGemm).macs, p2 * 32 * 16 + p2 * 16 * 96 +
-                                                             p4 * 96 * 24 + 2 * p4 * 24 * 144 +
-                                                             p4 * 24 * 144 + p8 * 144 * 32);
-  EXPECT_EQ(count.by_kind.at(OpKind::kGemm).calls, 7);
-  EXPECT_EQ(count.by_kind.count(OpKind::kPointwise), 0u);
+  const double pointwise = p2 * 32 * 16 + p2 * 16 * 96 + p4 * 96 * 24 + 2 * p4 * 24 * 144 +
+                           p4 * 24 * 144 + p8 * 144 * 32;
+  for (const bool inference : {true, false}) {
+    SCOPED_TRACE(inference ? "inference" : "training");
+    std::optional<c10::InferenceMode> mode;
+    if (inference) mode.emplace();
+    backbone->train(!inference);
+    OpCounter counter;
+    backbone->forward(x);
+    const OpCount& count = counter.count();
+    const OpKind one_by_one = inference ? OpKind::kPointwise : OpKind::kGemm;
+    EXPECT_DOUBLE_EQ(count.by_kind.at(OpKind::kDenseConv).macs, dense);
+    EXPECT_DOUBLE_EQ(count.by_kind.at(OpKind::kDepthwise).macs, depthwise);
+    EXPECT_DOUBLE_EQ(count.by_kind.at(one_by_one).macs, pointwise);
+    EXPECT_EQ(count.by_kind.at(one_by_one).calls, 7);
+    EXPECT_EQ(count.by_kind.size(), 3u);
+  }
 }
 
 }  // namespace

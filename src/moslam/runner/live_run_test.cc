@@ -159,6 +159,29 @@ TEST(LiveRunTest, SourceSlowerThanTrackingHasEveryFrameTracked) {
   EXPECT_EQ(result.camera.size(), 30u);
 }
 
+// --segment-every on a live source: the mask source runs on every K-th captured frame, counted
+// from the first, as on recorded data; auto (0) segments at least the first frame.
+TEST(LiveRunTest, SegmentEveryCountsCapturedFrames) {
+  for (const int every : {3, 0}) {
+    SCOPED_TRACE(every);
+    FakeSource source(12);
+    CountingTracker tracker;
+    source.before_grab = [&tracker](int i) { tracker.WaitTracked(i); };
+    const auto masks = MakeMaskSource({}, NoSequence());
+    RunOptions options = LiveOptions(2);
+    options.segment_every = every;
+    const RunResult result = RunLive(source, tracker, *masks, options);
+    EXPECT_EQ(result.end, RunEnd::kCompleted) << result.end_message;
+    ASSERT_EQ(result.frames.size(), 12u);
+    EXPECT_TRUE(result.frames[0].segmented);
+    if (every == 3) {
+      for (const FrameRecord& frame : result.frames) {
+        EXPECT_EQ(frame.segmented, frame.index % 3 == 0) << "frame " << frame.index;
+      }
+    }
+  }
+}
+
 TEST(LiveRunTest, SourceFasterThanTrackingDropsFramesAndCountsThem) {
   constexpr int kFrames = 40;
   FakeSource source(kFrames);
