@@ -61,6 +61,7 @@ struct RunArgs {
   bool realtime = false;
   bool deterministic = false;
   int deterministic_mapping_frames = slam::SystemOptions{}.deterministic_mapping_frames;
+  int local_ba_keyframes = slam::SystemOptions{}.local_ba_keyframes;
   double deterministic_mapping_ms = slam::SystemOptions{}.deterministic_mapping_ms_per_observation;
   bool monocular = false;
   bool quiet = false;
@@ -213,6 +214,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.deterministic = args.deterministic;
   options.deterministic_mapping_frames = args.deterministic_mapping_frames;
   options.deterministic_mapping_ms_per_observation = args.deterministic_mapping_ms;
+  options.local_ba_keyframes = args.local_ba_keyframes;
   options.vocabulary_path = ResolveVocabulary(args.vocabulary);
   options.loop_closing = !args.no_loop_closing;
   options.loop_verification = !args.no_loop_verification;
@@ -690,6 +692,13 @@ void AddRunCommand(CLI::App& app) {
                    "With --deterministic and --deterministic-mapping-frames 0: milliseconds of "
                    "mapping per observation of the last local bundle adjustment, turned into "
                    "frames at the settings' Camera.fps")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      ->add_option("--local-ba-keyframes", args->local_ba_keyframes,
+                   "Local bundle adjustment moves the new keyframe and at most N of its best "
+                   "covisible keyframes, the others that see its points fixed; 0: every "
+                   "covisible keyframe (ORB-SLAM2)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_flag("--monocular", args->monocular,

@@ -160,7 +160,8 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
     generation = map_->generation();
     std::map<uint64_t, size_t> pose_index;
     std::vector<std::shared_ptr<map::KeyFrame>> local = {keyframe};
-    for (const auto& kf : keyframe->BestCovisibles(-1)) local.push_back(kf);
+    const int covisibles = options_.max_local_keyframes > 0 ? options_.max_local_keyframes : -1;
+    for (const auto& kf : keyframe->BestCovisibles(covisibles)) local.push_back(kf);
     for (const auto& kf : local) {
       pose_index[kf->id] = poses.size();
       poses.push_back(kf);

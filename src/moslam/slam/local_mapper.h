@@ -37,6 +37,12 @@ struct LocalMapperOptions {
   // bias there. An experiment switch (slam_eval --ba-far-monocular) until it is measured on more
   // than one stereo sequence.
   bool far_stereo_as_monocular = false;
+  // The keyframes local bundle adjustment moves: the new one and at most this many of its best
+  // covisible keyframes (by shared points); the other keyframes that see the local points stay
+  // fixed. 0: every covisible keyframe (ORB-SLAM2), which in a room the camera keeps looking
+  // around is every keyframe of the map: the "local" adjustment is then a global one, hundreds of
+  // milliseconds per keyframe.
+  int max_local_keyframes = 0;
   bool keyframe_culling = true;
   int num_threads = 1;  // Ceres threads in bundle adjustment
   // Monocular keyframes (ORB-SLAM2's monocular settings): 20 neighbours for triangulation and

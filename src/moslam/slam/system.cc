@@ -67,6 +67,10 @@ void SystemOptions::Check() const {
     throw InputError("SystemOptions.deterministic_mapping_ms_per_observation must be >= 0, got " +
                      std::to_string(deterministic_mapping_ms_per_observation));
   }
+  if (local_ba_keyframes < 0) {
+    throw InputError("SystemOptions.local_ba_keyframes must be >= 0, got " +
+                     std::to_string(local_ba_keyframes));
+  }
   if (keyframe_queue_capacity < 1) {
     throw InputError("SystemOptions.keyframe_queue_capacity must be >= 1");
   }
@@ -177,6 +181,7 @@ class System::Impl : public KeyFrameSink {
     m.close_depth = o.settings.CloseDepthMetres();
     m.local_bundle_adjustment = o.local_bundle_adjustment;
     m.far_stereo_as_monocular = o.ba_far_stereo_as_monocular;
+    m.max_local_keyframes = o.local_ba_keyframes;
     return m;
   }
   static LoopCloserOptions LoopOptions(const SystemOptions& o) {

@@ -63,6 +63,8 @@ struct SystemOptions {
   bool local_bundle_adjustment = true;
   // LocalMapperOptions::far_stereo_as_monocular (default off, as ORB-SLAM2).
   bool ba_far_stereo_as_monocular = false;
+  // LocalMapperOptions::max_local_keyframes (0: every covisible keyframe, as ORB-SLAM2).
+  int local_ba_keyframes = 0;
   // Bag-of-words vocabulary (vocab::Vocabulary::Load: this project's binary format or
   // ORB-SLAM2's ORBvoc.txt), loaded once at construction; it enables the keyframe database and
   // relocalization (loop closing uses it too). Empty: no vocabulary, no relocalization (a lost
