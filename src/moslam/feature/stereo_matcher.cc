@@ -40,16 +40,80 @@ float PatchSad(const cv::Mat& left, int lx, const cv::Mat& right, int rx, int y,
   return static_cast<float>(sad);
 }
 
+// SAD of two patches after subtracting each patch's mean intensity (zero-mean SAD): insensitive
+// to a brightness offset between the cameras, and on level 0's larger windows less noisy than
+// ORB-SLAM2's subtraction of the centre pixel, whose noise would shift every term.
+int PatchZsad(const cv::Mat& left, int lx, const cv::Mat& right, int rx, int y, int w) {
+  int lsum = 0, rsum = 0;
+  for (int dy = -w; dy <= w; ++dy) {
+    const uint8_t* l = left.ptr<uint8_t>(y + dy) + lx;
+    const uint8_t* r = right.ptr<uint8_t>(y + dy) + rx;
+    for (int dx = -w; dx <= w; ++dx) {
+      lsum += l[dx];
+      rsum += r[dx];
+    }
+  }
+  const int n = (2 * w + 1) * (2 * w + 1);
+  // Offset in 1/n grey levels, so the sums stay integers: n * (l - lmean) - n * (r - rmean).
+  const int offset = rsum - lsum;
+  int sad = 0;
+  for (int dy = -w; dy <= w; ++dy) {
+    const uint8_t* l = left.ptr<uint8_t>(y + dy) + lx;
+    const uint8_t* r = right.ptr<uint8_t>(y + dy) + rx;
+    for (int dx = -w; dx <= w; ++dx) sad += std::abs(n * (l[dx] - r[dx]) + offset);
+  }
+  return sad;
+}
+
+// Sub-pixel offset of a cost minimum from the costs s1, s2, s3 at -1, 0, +1 (s2 the smallest).
+// False when the costs are flat or the offset leaves [-1, 1].
+bool SubPixelOffset(float s1, float s2, float s3, SubPixelFit fit, float* delta) {
+  if (fit == SubPixelFit::kParabola) {
+    const float denom = 2.0f * (s1 + s3 - 2.0f * s2);
+    if (!(denom > 0.0f)) return false;
+    *delta = (s1 - s3) / denom;
+  } else {
+    // Lines of slopes -a and +a through the three points (Shimizu & Okutomi 2001): the steeper
+    // side gives the slope, a = max(s1, s3) - s2, and the lines cross at (s1 - s3) / (2 a).
+    const float a = std::max(s1, s3) - s2;
+    if (!(a > 0.0f)) return false;
+    *delta = (s1 - s3) / (2.0f * a);
+  }
+  return *delta >= -1.0f && *delta <= 1.0f;
+}
+
 struct Refined {
   float u_right;  // level-0 pixels
-  float sad;
+  float sad;      // SAD on the keypoint's level (the outlier step compares these)
 };
 
-// Steps 3 of the header: SAD search around the descriptor match on the left keypoint's level,
-// then the parabola vertex. nullopt-like result (sad < 0) when the window leaves the image, the
-// minimum lies on the search border or the vertex is more than one pixel away.
-Refined RefineBySad(const cv::KeyPoint& left_kp, float u_right0, const OrbExtractor& left_ex,
-                    const OrbExtractor& right_ex, const StereoMatchOptions& options) {
+// The minimum of `sads` (index 0 is offset -search) with its sub-pixel offset; false when it
+// lies on the border, the fit fails, or (max_ratio < 1) another SAD at least two steps away is
+// nearly as small.
+bool SadMinimum(const std::vector<float>& sads, SubPixelFit fit, double max_ratio, float* offset,
+                float* best_sad) {
+  const int n = static_cast<int>(sads.size());
+  const int best = static_cast<int>(std::min_element(sads.begin(), sads.end()) - sads.begin());
+  if (best == 0 || best == n - 1) return false;
+  if (max_ratio < 1.0) {
+    float second = std::numeric_limits<float>::max();
+    for (int i = 0; i < n; ++i) {
+      if (std::abs(i - best) >= 2) second = std::min(second, sads[i]);
+    }
+    if (sads[best] > max_ratio * second) return false;
+  }
+  float delta = 0.0f;
+  if (!SubPixelOffset(sads[best - 1], sads[best], sads[best + 1], fit, &delta)) return false;
+  *offset = static_cast<float>(best - (n - 1) / 2) + delta;
+  *best_sad = sads[best];
+  return true;
+}
+
+// Step 3 of the header on the left keypoint's level: SAD search around the descriptor match, then
+// the sub-pixel fit. sad < 0 when the window leaves the image, the minimum lies on the search
+// border, the match is ambiguous or the sub-pixel offset is more than one pixel.
+Refined RefineOnLevel(const cv::KeyPoint& left_kp, float u_right0, const OrbExtractor& left_ex,
+                      const OrbExtractor& right_ex, const StereoMatchOptions& options) {
   const Refined failed{0.0f, -1.0f};
   const int level = left_kp.octave;
   const float inv_scale = left_ex.inv_scale_factors()[level];
@@ -65,27 +129,56 @@ Refined RefineBySad(const cv::KeyPoint& left_kp, float u_right0, const OrbExtrac
     return failed;
   }
   if (ur0 - search - w < 0 || ur0 + search + w >= right_image.cols) return failed;
-
   std::vector<float> sads(2 * search + 1);
-  int best = 0;
-  float best_sad = std::numeric_limits<float>::max();
   for (int inc = -search; inc <= search; ++inc) {
-    const float sad = PatchSad(left_image, ul, right_image, ur0 + inc, vl, w);
-    sads[inc + search] = sad;
-    if (sad < best_sad) {
-      best_sad = sad;
-      best = inc;
-    }
+    sads[inc + search] = PatchSad(left_image, ul, right_image, ur0 + inc, vl, w);
   }
-  if (best == -search || best == search) return failed;
-  // Vertex of the parabola through (best - 1, best, best + 1).
-  const float s1 = sads[best + search - 1], s2 = sads[best + search], s3 = sads[best + search + 1];
-  const float denom = 2.0f * (s1 + s3 - 2.0f * s2);
-  if (!(denom > 0.0f)) return failed;
-  const float delta = (s1 - s3) / denom;
-  if (delta < -1.0f || delta > 1.0f) return failed;
-  return Refined{left_ex.scale_factors()[level] * (static_cast<float>(ur0 + best) + delta),
-                 best_sad};
+  float offset = 0.0f, sad = 0.0f;
+  if (!SadMinimum(sads, options.subpixel, options.max_sad_ratio, &offset, &sad)) return failed;
+  return Refined{left_ex.scale_factors()[level] * (static_cast<float>(ur0) + offset), sad};
+}
+
+// The level's match refined on level 0 (issue 29): a window of patch_half_size * scale pixels
+// around the level-0 position of the keypoint's level pixel, (x_l + 0.5) * W / w_l - 0.5 (the
+// pixel centres of cv::resize), searched over +-(scale + 1) pixels around the level's disparity.
+// The disparity found holds for that window's centre; the returned u_right keeps it relative to
+// the keypoint's nominal x (x_l * scale), which the rest of the system uses.
+Refined RefineOnLevel0(const cv::KeyPoint& left_kp, const Refined& coarse,
+                       const OrbExtractor& left_ex, const OrbExtractor& right_ex,
+                       const StereoMatchOptions& options) {
+  const Refined failed{0.0f, -1.0f};
+  const int level = left_kp.octave;
+  const cv::Mat& left0 = left_ex.level_image(0);
+  const cv::Mat& right0 = right_ex.level_image(0);
+  const cv::Mat& left_level = left_ex.level_image(level);
+  const float scale = left_ex.scale_factors()[level];
+  const float inv_scale = left_ex.inv_scale_factors()[level];
+  const double sx = static_cast<double>(left0.cols) / left_level.cols;
+  const double sy = static_cast<double>(left0.rows) / left_level.rows;
+  const double xl = std::round(left_kp.pt.x * inv_scale), yl = std::round(left_kp.pt.y * inv_scale);
+  const int ul = static_cast<int>(std::lround((xl + 0.5) * sx - 0.5));
+  const int vl = static_cast<int>(std::lround((yl + 0.5) * sy - 0.5));
+  const float coarse_disparity = left_kp.pt.x - coarse.u_right;
+  const int ur0 = static_cast<int>(std::lround(static_cast<float>(ul) - coarse_disparity));
+  const int w = static_cast<int>(std::lround(options.patch_half_size * scale));
+  const int search = static_cast<int>(std::ceil(scale)) + 1;
+  if (vl - w < 0 || vl + w >= left0.rows || ul - w < 0 || ul + w >= left0.cols) return failed;
+  if (ur0 - search - w < 0 || ur0 + search + w >= right0.cols) return failed;
+  std::vector<float> sads(2 * search + 1);
+  for (int inc = -search; inc <= search; ++inc) {
+    sads[inc + search] = static_cast<float>(PatchZsad(left0, ul, right0, ur0 + inc, vl, w));
+  }
+  float offset = 0.0f, unused = 0.0f;
+  if (!SadMinimum(sads, options.subpixel, 1.0, &offset, &unused)) return failed;
+  const float disparity = static_cast<float>(ul) - (static_cast<float>(ur0) + offset);
+  return Refined{left_kp.pt.x - disparity, coarse.sad};
+}
+
+Refined RefineBySad(const cv::KeyPoint& left_kp, float u_right0, const OrbExtractor& left_ex,
+                    const OrbExtractor& right_ex, const StereoMatchOptions& options) {
+  const Refined coarse = RefineOnLevel(left_kp, u_right0, left_ex, right_ex, options);
+  if (coarse.sad < 0.0f || !options.refine_at_level0) return coarse;
+  return RefineOnLevel0(left_kp, coarse, left_ex, right_ex, options);
 }
 
 }  // namespace
@@ -100,6 +193,9 @@ void StereoMatchOptions::Check() const {
   if (search_half_width < 1) ThrowInput("stereo option search_half_width must be >= 1");
   if (!(min_depth_baselines > 0.0)) ThrowInput("stereo option min_depth_baselines must be > 0");
   if (!(outlier_factor > 0.0)) ThrowInput("stereo option outlier_factor must be > 0");
+  if (!(max_sad_ratio >= 0.0 && max_sad_ratio <= 1.0)) {
+    ThrowInput("stereo option max_sad_ratio must be in [0, 1] (got {})", max_sad_ratio);
+  }
 }
 
 StereoMatches MatchStereo(const OrbFeatures& left, const OrbExtractor& left_extractor,

@@ -7,6 +7,8 @@
 //   3. the match is refined by sum of absolute differences (SAD) of an 11 x 11 patch on the
 //      keypoint's pyramid level over +-5 pixels, then to sub-pixel by a parabola through the
 //      three SAD values around the minimum (rejected when the vertex is more than 1 px away);
+//      Issue 29 changed the defaults: the sub-pixel step runs on level 0 (refine_at_level0) and
+//      fits two lines instead of a parabola (SubPixelFit), which removed a disparity bias;
 //   4. matches whose SAD exceeds 1.5 * 1.4 * median SAD are discarded as outliers.
 // Depth = bf / disparity.
 #pragma once
@@ -16,6 +18,18 @@
 #include "moslam/feature/orb_extractor.h"
 
 namespace moslam::feature {
+
+// How the SAD minimum is refined to sub-pixel (step 3 of the header).
+enum class SubPixelFit {
+  // ORB-SLAM2's parabola through the three SADs around the minimum. SAD is V-shaped near its
+  // minimum (|delta| * sum of |gradient|), so the parabola's vertex is pulled toward the integer:
+  // a true offset delta in (-0.5, 0.5) is estimated as delta / (2 (1 - |delta|)).
+  kParabola,
+  // Equiangular line fit (Shimizu & Okutomi 2001, "Significance and attributes of sub-pixel
+  // estimation on area-based matching"): two lines of opposite slope through the three SADs, exact
+  // for a V-shaped cost and symmetric, so no pull toward integer disparities.
+  kEquiangular,
+};
 
 struct StereoMatchOptions {
   // Largest Hamming distance (bits of 256) of a descriptor match. ORB-SLAM2 uses
@@ -31,6 +45,17 @@ struct StereoMatchOptions {
   double min_depth_baselines = 1.0;
   // Matches with SAD > outlier_factor * median SAD are dropped (> 0; ORB-SLAM2: 1.5 * 1.4).
   double outlier_factor = 1.5 * 1.4;
+  // Sub-pixel step (issue 29: the parabola biases disparities; see SubPixelFit).
+  SubPixelFit subpixel = SubPixelFit::kEquiangular;
+  // Refine the match on level 0 (full resolution) after the SAD search on the keypoint's level:
+  // SAD over a window of patch_half_size * scale level-0 pixels, searched over +-(scale + 1)
+  // pixels around the level's minimum, then the sub-pixel fit. On the keypoint's level alone
+  // (ORB-SLAM2) the sub-pixel error is in that level's pixels, up to 3.6 level-0 px on level 7.
+  bool refine_at_level0 = true;
+  // Ambiguity test on the keypoint's level: the match is dropped when its SAD is above this
+  // fraction of the smallest SAD at least two pixels away from it (in [0, 1]; 1 keeps all, as
+  // ORB-SLAM2). Repeated texture along the row gives a second minimum as deep as the first.
+  double max_sad_ratio = 1.0;
 
   // Throws InputError naming the option.
   void Check() const;

@@ -178,6 +178,47 @@ void BuildStreet(Builder& b) {
   }
 }
 
+// Issue 29's far-field stereo scene: an open road along +x with nothing near it, so that every
+// feature is 20-150 m away (disparity 2.5-19 px with KITTI's bf of 380), where a disparity bias of
+// a tenth of a pixel is a depth error of 0.5-4 %. Road and verges are tiled coarsely (few corners
+// on them); buildings, signs and billboards stand 20-60 m either side of the road, and a far row
+// 100-150 m out. A camera in a lane never comes nearer than 20 m to them, and they leave its
+// +-41 degree view before they come nearer than about 23 m in depth.
+void BuildOpenRoad(Builder& b) {
+  Rng& rng = b.rng();
+  const TextureSet& tex = b.textures();
+  const double length = 800.0;
+  b.Add(At(length / 2 - 50, 0, -0.1), {length / 2 + 50, 8.0, 0.1},
+        Pick(rng, tex, TextureKind::kRoad), 40.0, kBackground, 0);
+  for (int side = -1; side <= 1; side += 2) {
+    b.Add(At(length / 2 - 50, side * 108.0, -0.15), {length / 2 + 50, 100.0, 0.1},
+          Pick(rng, tex, TextureKind::kFloor), 60.0, kBackground, 0, 0.8f);
+    // Near row, 20-60 m out: houses and sheds with facades facing the road.
+    for (double x = -20.0; x < length;) {
+      const double w = rng.Uniform(6, 20), h = rng.Uniform(4, 14), d = rng.Uniform(6, 12);
+      const double y = rng.Uniform(20, 60) + d / 2;
+      b.Add(At(x + w / 2, side * y, h / 2), {w / 2, d / 2, h / 2},
+            Pick(rng, tex, TextureKind::kFacade), rng.Uniform() < 0.5 ? 0.0 : 6.0, kBackground, 0);
+      x += w + rng.Uniform(5, 25);
+    }
+    // Billboards and signs on posts, 20-30 m out, facing the traffic.
+    for (double x = rng.Uniform(0, 30); x < length; x += rng.Uniform(30, 60)) {
+      const double y = side * rng.Uniform(20, 30), w = rng.Uniform(3, 8), h = rng.Uniform(2, 4);
+      b.Add(At(x, y, 3.0 + h / 2), {0.1, w / 2, h / 2}, Pick(rng, tex, TextureKind::kPoster), 0.0,
+            kBackground, 0);
+      b.Add(At(x, y, 1.5), {0.15, 0.15, 1.5}, Pick(rng, tex, TextureKind::kHair), 0.5, kBackground,
+            0);
+    }
+    // Far row, 100-150 m out: large buildings.
+    for (double x = -50.0; x < length + 100;) {
+      const double w = rng.Uniform(20, 50), h = rng.Uniform(15, 40), d = rng.Uniform(15, 30);
+      b.Add(At(x + w / 2, side * (rng.Uniform(100, 150) + d / 2), h / 2), {w / 2, d / 2, h / 2},
+            Pick(rng, tex, TextureKind::kFacade), 0.0, kBackground, 0);
+      x += w + rng.Uniform(5, 30);
+    }
+  }
+}
+
 }  // namespace
 
 const std::vector<PresetInfo>& Presets() {
@@ -219,6 +260,10 @@ const std::vector<PresetInfo>& Presets() {
        "pushed back and forth 1.3 m in front of the camera, stopping in view; camera as w_xyz "
        "(moving/ holds its mask)",
        false, 900, 30.0},
+      {"open_road",
+       "stereo car at ~25 m/s on an open road, every feature 20-150 m away (far-field stereo, "
+       "issue 29)",
+       true, 100, 10.0},
   };
   return kPresets;
 }
@@ -271,6 +316,20 @@ SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet
   b.SetPeopleStyle(people_style, seed);
   if (internal::IsAliasingPreset(name)) {
     internal::MakeAliasingPreset(name, b, &spec, width, height);
+    return spec;
+  }
+  if (name == "open_road") {
+    spec.camera = KittiCamera(width > 0 ? width : 1226, height > 0 ? height : 370);
+    spec.baseline_m = 0.537;
+    BuildOpenRoad(b);
+    spec.lighting.direction_world = Vector3d(0.3, 0.5, -0.8);
+    spec.lighting.ambient = 0.6f;
+    const double speed = rng.Uniform(24, 26), lane = -2.0;
+    std::array<Wobble, 2> sway = {Wobble(rng, 0.05, 4, 8), Wobble(rng, 0.01, 3, 6)};
+    spec.T_world_cam = [speed, lane, sway](double t) {
+      const Vector3d eye(speed * t, lane + sway[0](t), 1.65);
+      return Rotate(LookAt(eye, eye + Vector3d(10, 0, -0.1)), 0, sway[1](t), 0);
+    };
     return spec;
   }
   if (spec.info.stereo) {
