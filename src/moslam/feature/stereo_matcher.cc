@@ -139,6 +139,7 @@ Refined RefineOnLevel(const cv::KeyPoint& left_kp, float u_right0, const OrbExtr
 }
 
 // The level's match refined on level 0 (issue 29): a window of patch_half_size * scale pixels
+// (at most level0_max_half_size)
 // around the level-0 position of the keypoint's level pixel, (x_l + 0.5) * W / w_l - 0.5 (the
 // pixel centres of cv::resize), searched over +-(scale + 1) pixels around the level's disparity.
 // The disparity found holds for that window's centre; the returned u_right keeps it relative to
@@ -160,7 +161,8 @@ Refined RefineOnLevel0(const cv::KeyPoint& left_kp, const Refined& coarse,
   const int vl = static_cast<int>(std::lround((yl + 0.5) * sy - 0.5));
   const float coarse_disparity = left_kp.pt.x - coarse.u_right;
   const int ur0 = static_cast<int>(std::lround(static_cast<float>(ul) - coarse_disparity));
-  const int w = static_cast<int>(std::lround(options.patch_half_size * scale));
+  const int w = std::min(options.level0_max_half_size,
+                         static_cast<int>(std::lround(options.patch_half_size * scale)));
   const int search = static_cast<int>(std::ceil(scale)) + 1;
   if (vl - w < 0 || vl + w >= left0.rows || ul - w < 0 || ul + w >= left0.cols) return failed;
   if (ur0 - search - w < 0 || ur0 + search + w >= right0.cols) return failed;
@@ -191,6 +193,7 @@ void StereoMatchOptions::Check() const {
   if (!(row_band_scale > 0.0f)) ThrowInput("stereo option row_band_scale must be > 0");
   if (patch_half_size < 1) ThrowInput("stereo option patch_half_size must be >= 1");
   if (search_half_width < 1) ThrowInput("stereo option search_half_width must be >= 1");
+  if (level0_max_half_size < 1) ThrowInput("stereo option level0_max_half_size must be >= 1");
   if (!(min_depth_baselines > 0.0)) ThrowInput("stereo option min_depth_baselines must be > 0");
   if (!(outlier_factor > 0.0)) ThrowInput("stereo option outlier_factor must be > 0");
   if (!(max_sad_ratio >= 0.0 && max_sad_ratio <= 1.0)) {
