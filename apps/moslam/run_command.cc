@@ -66,6 +66,7 @@ struct RunArgs {
   bool monocular = false;
   bool quiet = false;
   bool no_loop_closing = false;
+  bool ba_far_monocular = false;
   bool no_loop_verification = false;
   bool no_loop_word_weights = false;
   bool no_short_loss_recovery = false;
@@ -217,6 +218,7 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.local_ba_keyframes = args.local_ba_keyframes;
   options.vocabulary_path = ResolveVocabulary(args.vocabulary);
   options.loop_closing = !args.no_loop_closing;
+  options.ba_far_stereo_as_monocular = args.ba_far_monocular;
   options.loop_verification = !args.no_loop_verification;
   options.loop_recent_word_weights = !args.no_loop_word_weights;
   options.short_loss_recovery = !args.no_short_loss_recovery;
@@ -705,6 +707,9 @@ void AddRunCommand(CLI::App& app) {
                     "Monocular SLAM on the left / colour images only, ignoring right images and "
                     "depth (a KITTI folder without image_1 is monocular anyway)");
   command->add_flag("--quiet", args->quiet, "No progress line and only warnings in the log");
+  command->add_flag("--ba-far-monocular", args->ba_far_monocular,
+                    "Bundle adjustment uses only [u, v] of stereo observations beyond ThDepth "
+                    "(ORB-SLAM2's far points; slam::SystemOptions::ba_far_stereo_as_monocular)");
   command->add_flag("--no-loop-closing", args->no_loop_closing,
                     "Run without loop closing even with a vocabulary (to measure what it does)");
   command->add_flag("--no-loop-verification", args->no_loop_verification,
