@@ -99,7 +99,10 @@ TEST(StereoMatcherTest, MatchStereoReportsRightIndices) {
     ++count;
     const cv::KeyPoint& kr = rf.keypoints[m.right_index[i]];
     EXPECT_LE(std::abs(kr.octave - lf.keypoints[i].octave), 1);
-    EXPECT_NEAR(kr.pt.x, m.u_right[i], 2.0 * le.scale_factors()[lf.keypoints[i].octave] + 5.0);
+    // The SAD search moves the match by at most search_half_width (+1 for the sub-pixel step)
+    // level pixels, and the level-0 refinement by at most scale + 2 more (issue 29).
+    const float scale = le.scale_factors()[lf.keypoints[i].octave];
+    EXPECT_NEAR(kr.pt.x, m.u_right[i], 6.0 * scale + scale + 2.0);
   }
   EXPECT_EQ(count, m.num_matches);
   EXPECT_GT(count, 300);
