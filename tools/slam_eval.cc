@@ -34,7 +34,8 @@ int main(int argc, char** argv) {
   app.add_flag("--no-local-ba", no_local_ba,
                "local bundle adjustment off (to measure what it contributes)");
   app.add_flag("--ba-far-monocular", ba_far_mono,
-               "local BA drops the u_right row of observations beyond ThDepth");
+               "tracking and BA drop the u_right row of observations beyond ThDepth "
+               "(moslam run --far-stereo monocular)");
   app.add_option("--log", log_level, "log level");
   CLI11_PARSE(app, argc, argv);
   moslam::SetupLogging(log_level);
@@ -44,7 +45,7 @@ int main(int argc, char** argv) {
         data, settings, deterministic, frames, "",
         [&](moslam::slam::SystemOptions* o) {
           o->local_bundle_adjustment = !no_local_ba;
-          o->ba_far_stereo_as_monocular = ba_far_mono;
+          if (ba_far_mono) o->far_stereo = moslam::optim::FarStereo::kMonocular;
         },
         realtime);
     if (verbose) {

@@ -66,7 +66,7 @@ struct RunArgs {
   bool monocular = false;
   bool quiet = false;
   bool no_loop_closing = false;
-  bool ba_far_monocular = false;
+  std::string far_stereo = "auto";
   bool no_loop_verification = false;
   bool no_loop_word_weights = false;
   bool no_short_loss_recovery = false;
@@ -218,7 +218,9 @@ std::unique_ptr<runner::Tracker> MakeTracker(const io::OrbSlamSettings& settings
   options.local_ba_keyframes = args.local_ba_keyframes;
   options.vocabulary_path = ResolveVocabulary(args.vocabulary);
   options.loop_closing = !args.no_loop_closing;
-  options.ba_far_stereo_as_monocular = args.ba_far_monocular;
+  if (args.far_stereo == "full") options.far_stereo = optim::FarStereo::kFull;
+  if (args.far_stereo == "weighted") options.far_stereo = optim::FarStereo::kDepthWeighted;
+  if (args.far_stereo == "monocular") options.far_stereo = optim::FarStereo::kMonocular;
   options.loop_verification = !args.no_loop_verification;
   options.loop_recent_word_weights = !args.no_loop_word_weights;
   options.short_loss_recovery = !args.no_short_loss_recovery;
@@ -707,9 +709,14 @@ void AddRunCommand(CLI::App& app) {
                     "Monocular SLAM on the left / colour images only, ignoring right images and "
                     "depth (a KITTI folder without image_1 is monocular anyway)");
   command->add_flag("--quiet", args->quiet, "No progress line and only warnings in the log");
-  command->add_flag("--ba-far-monocular", args->ba_far_monocular,
-                    "Bundle adjustment uses only [u, v] of stereo observations beyond ThDepth "
-                    "(ORB-SLAM2's far points; slam::SystemOptions::ba_far_stereo_as_monocular)");
+  command
+      ->add_option("--far-stereo", args->far_stereo,
+                   "How tracking and bundle adjustment use the disparity of stereo observations "
+                   "beyond ThDepth (ORB-SLAM2's far points): full (as near ones, ORB-SLAM2), "
+                   "weighted (information x (ThDepth depth / depth)^2), monocular (dropped); "
+                   "auto: weighted for stereo, full for RGB-D")
+      ->check(CLI::IsMember({"auto", "full", "weighted", "monocular"}))
+      ->capture_default_str();
   command->add_flag("--no-loop-closing", args->no_loop_closing,
                     "Run without loop closing even with a vocabulary (to measure what it does)");
   command->add_flag("--no-loop-verification", args->no_loop_verification,

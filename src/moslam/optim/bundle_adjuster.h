@@ -65,4 +65,8 @@ struct BundleResult {
 // input unchanged.
 BundleResult AdjustBundle(const BundleProblem& problem, const BundleAdjusterOptions& options = {});
 
+// Applies `far` to every edge, kDepthWeighted with the strength of the problem's close stereo
+// observations per pose (FarStereoWeighting::Strength).
+void WeighFarStereo(const FarStereoWeighting& far, BundleProblem* problem);
+
 }  // namespace moslam::optim

@@ -1,5 +1,7 @@
 #include "moslam/optim/cost_functions.h"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace moslam::optim {
@@ -69,6 +71,33 @@ double ChiSquare(const CameraModel& camera, const Observation& observation,
     return std::numeric_limits<double>::infinity();
   }
   return r.squaredNorm();
+}
+
+bool FarStereoWeighting::IsClose(double bf, const Observation& observation) const {
+  if (!observation.is_stereo()) return false;
+  const double disparity = observation.pixel.x() - observation.u_right;
+  return disparity > 0.0 && (close_depth <= 0.0 || bf / disparity <= close_depth);
+}
+
+double FarStereoWeighting::Strength(size_t close, size_t poses) {
+  if (poses == 0) return 0.0;
+  const double per_pose = static_cast<double>(close) / static_cast<double>(poses);
+  return std::clamp((per_pose - kCloseObservationsPerPoseNone) /
+                        (kCloseObservationsPerPose - kCloseObservationsPerPoseNone),
+                    0.0, 1.0);
+}
+
+void FarStereoWeighting::Apply(double bf, double strength, Observation* observation) const {
+  if (policy == FarStereo::kFull || close_depth <= 0.0 || !observation->is_stereo()) return;
+  const double disparity = observation->pixel.x() - observation->u_right;
+  const double depth = disparity > 0.0 ? bf / disparity : std::numeric_limits<double>::infinity();
+  if (!(depth > close_depth)) return;
+  if (policy == FarStereo::kMonocular || !std::isfinite(depth)) {
+    observation->u_right = -1.0;
+    return;
+  }
+  const double ratio = close_depth / depth;
+  observation->right_info_scale = std::max(ratio * ratio, 1.0 - std::clamp(strength, 0.0, 1.0));
 }
 
 }  // namespace moslam::optim

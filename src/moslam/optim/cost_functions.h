@@ -80,7 +80,8 @@ bool ProjectionResidual(const CameraModel& camera, const Observation& observatio
   residual[0] = sqrt_info * (u - observation.pixel.x());
   residual[1] = sqrt_info * (camera.fy * y + camera.cy - observation.pixel.y());
   if constexpr (N == 3) {
-    residual[2] = sqrt_info * (u - camera.bf * inv_z - observation.u_right);
+    residual[2] = sqrt_info * std::sqrt(observation.right_info_scale) *
+                  (u - camera.bf * inv_z - observation.u_right);
   }
   if (jacobian != nullptr) {
     const double s = sqrt_info * inv_z;
@@ -93,9 +94,10 @@ bool ProjectionResidual(const CameraModel& camera, const Observation& observatio
     J(1, 2) = -s * camera.fy * y;
     if constexpr (N == 3) {
       // u_right = u - bf / z: d/dz adds bf / z^2.
-      J(2, 0) = J(0, 0);
+      const double s_right = s * std::sqrt(observation.right_info_scale);
+      J(2, 0) = s_right * camera.fx;
       J(2, 1) = 0.0;
-      J(2, 2) = J(0, 2) + s * camera.bf * inv_z;
+      J(2, 2) = s_right * (camera.bf * inv_z - camera.fx * x);
     }
   }
   return true;

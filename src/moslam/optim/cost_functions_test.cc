@@ -163,6 +163,95 @@ TEST(CostFunctions, ResidualIsWhitenedReprojectionError) {
   EXPECT_NEAR(ChiSquare(camera, observation, p_cam), 1.25, 1e-12);
 }
 
+// A far stereo row with a scaled information (FarStereoWeighting, issue 29): its residual and
+// its Jacobian rows both carry the square root of the scale.
+TEST(CostFunctions, ScaledRightRowJacobiansMatchNumeric) {
+  std::mt19937 rng(5);
+  for (int i = 0; i < 20; ++i) {
+    Case c = RandomCase(rng, true);
+    c.observation.right_info_scale = 0.05 + 0.9 * (i / 19.0);
+    ExpectJacobiansMatch(PoseReprojectionCost<3>(test::TestCamera(), c.observation, c.p_world),
+                         {c.pose.data()});
+    ExpectJacobiansMatch(BundleReprojectionCost<3>(test::TestCamera(), c.observation),
+                         {c.pose.data(), c.p_world.data()});
+  }
+}
+
+TEST(CostFunctions, ScaledRightRowWeighsOnlyTheDisparity) {
+  const CameraModel camera = test::TestCamera();
+  const Eigen::Vector3d p_cam(0.4, -0.2, 4.0);
+  const Eigen::Vector3d ideal = test::Project(camera, p_cam);
+  Observation observation;
+  observation.pixel = ideal.head<2>() + Eigen::Vector2d(1.0, -2.0);
+  observation.u_right = ideal.z() + 3.0;
+  observation.right_info_scale = 0.25;
+  std::array<double, kPoseSize> pose;
+  PackPose(geometry::SE3(), pose.data());
+  const double* blocks[] = {pose.data()};
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();
+  ASSERT_TRUE(
+      PoseReprojectionCost<3>(camera, observation, p_cam).Evaluate(blocks, r.data(), nullptr));
+  // u and v rows at sigma 1 px; the u_right row's -3 px halved (sqrt(0.25)).
+  EXPECT_TRUE(geometry::test::MatricesNear(r, Eigen::Vector3d(-1.0, 2.0, -1.5), 1e-12));
+  EXPECT_NEAR(ChiSquare(camera, observation, p_cam), r.squaredNorm(), 1e-12);
+}
+
+TEST(FarStereoWeighting, WeighsOnlyStereoRowsBeyondTheCloseDepth) {
+  const double bf = 40.0, close = 4.0;  // a disparity of 10 px is the close depth
+  const auto with_disparity = [](double d) {
+    Observation o;
+    o.pixel = Eigen::Vector2d(300.0, 200.0);
+    o.u_right = 300.0 - d;
+    return o;
+  };
+  const FarStereoWeighting weighted{FarStereo::kDepthWeighted, close};
+  EXPECT_TRUE(weighted.IsClose(bf, with_disparity(10.0)));
+  EXPECT_FALSE(weighted.IsClose(bf, with_disparity(9.0)));
+  EXPECT_FALSE(weighted.IsClose(bf, Observation()));
+  Observation near = with_disparity(20.0);  // 2 m
+  weighted.Apply(bf, 1.0, &near);
+  EXPECT_EQ(near.right_info_scale, 1.0);
+  EXPECT_EQ(near.u_right, 280.0);
+  Observation far = with_disparity(5.0);  // 8 m: (4 / 8)^2
+  weighted.Apply(bf, 1.0, &far);
+  EXPECT_DOUBLE_EQ(far.right_info_scale, 0.25);
+  EXPECT_EQ(far.u_right, 295.0);
+  // Fewer close points to hold the scale: blended toward full weight, none without them.
+  Observation half = with_disparity(5.0);
+  weighted.Apply(bf, 0.5, &half);
+  EXPECT_DOUBLE_EQ(half.right_info_scale, 0.5);
+  Observation alone = with_disparity(5.0);
+  weighted.Apply(bf, 0.0, &alone);
+  EXPECT_EQ(alone.right_info_scale, 1.0);
+  Observation at_infinity = with_disparity(0.0);  // no depth: nothing to weigh, dropped
+  weighted.Apply(bf, 1.0, &at_infinity);
+  EXPECT_FALSE(at_infinity.is_stereo());
+  Observation mono;
+  weighted.Apply(bf, 1.0, &mono);
+  EXPECT_FALSE(mono.is_stereo());
+  EXPECT_EQ(mono.right_info_scale, 1.0);
+
+  Observation dropped = with_disparity(5.0);
+  FarStereoWeighting{FarStereo::kMonocular, close}.Apply(bf, 0.0, &dropped);
+  EXPECT_FALSE(dropped.is_stereo());
+  Observation kept = with_disparity(5.0);
+  FarStereoWeighting{FarStereo::kFull, close}.Apply(bf, 1.0, &kept);
+  EXPECT_EQ(kept.u_right, 295.0);
+  EXPECT_EQ(kept.right_info_scale, 1.0);
+  Observation no_threshold = with_disparity(5.0);  // close depth 0: every depth is close
+  FarStereoWeighting{FarStereo::kDepthWeighted, 0.0}.Apply(bf, 1.0, &no_threshold);
+  EXPECT_EQ(no_threshold.right_info_scale, 1.0);
+}
+
+TEST(FarStereoWeighting, StrengthRisesFromFiftyToAHundredCloseObservationsPerPose) {
+  EXPECT_EQ(FarStereoWeighting::Strength(0, 3), 0.0);
+  EXPECT_EQ(FarStereoWeighting::Strength(150, 3), 0.0);  // 50 a pose
+  EXPECT_DOUBLE_EQ(FarStereoWeighting::Strength(225, 3), 0.5);
+  EXPECT_EQ(FarStereoWeighting::Strength(300, 3), 1.0);
+  EXPECT_EQ(FarStereoWeighting::Strength(1000, 3), 1.0);
+  EXPECT_EQ(FarStereoWeighting::Strength(10, 0), 0.0);
+}
+
 TEST(CostFunctions, PointBehindCameraFailsEvaluation) {
   const CameraModel camera = test::TestCamera();
   const Observation observation;

@@ -47,6 +47,8 @@ void CheckCamera(const CameraModel& camera) {
 void CheckObservation(const CameraModel& camera, const Observation& observation) {
   MOSLAM_CHECK(observation.inv_sigma2 > 0.0 && std::isfinite(observation.inv_sigma2))
       << "observation inv_sigma2 " << observation.inv_sigma2;
+  MOSLAM_CHECK(observation.right_info_scale > 0.0 && observation.right_info_scale <= 1.0)
+      << "observation right_info_scale " << observation.right_info_scale;
   MOSLAM_CHECK(!observation.is_stereo() || camera.bf > 0.0)
       << "stereo observation with a monocular camera (bf = 0)";
 }

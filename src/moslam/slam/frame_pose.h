@@ -16,17 +16,19 @@
 
 namespace moslam::slam {
 
-// The observations of keypoints `indices` of `frame`.
+// The observations of keypoints `indices` of `frame`, far stereo rows weighed by `far`.
 std::vector<optim::Observation> FrameObservations(const feature::Frame& frame,
-                                                  const std::vector<size_t>& indices);
+                                                  const std::vector<size_t>& indices,
+                                                  const optim::FarStereoWeighting& far = {});
 
 // points_world[k] is matched to keypoint indices[k] of `frame` (same size: CHECK). `weights`:
 // empty, or one per match in (0, 1]; `initial_outlier`: empty, or one flag per match
-// (optim::OptimizePose).
+// (optim::OptimizePose); `far`: how far stereo rows are weighed.
 optim::PoseOptimizerResult OptimizeFramePose(
     const optim::CameraModel& camera, const feature::Frame& frame,
     const std::vector<size_t>& indices, const std::vector<Eigen::Vector3d>& points_world,
     const geometry::SE3& T_cam_world_init, int num_threads = 1,
-    const std::vector<double>& weights = {}, const std::vector<bool>& initial_outlier = {});
+    const std::vector<double>& weights = {}, const std::vector<bool>& initial_outlier = {},
+    const optim::FarStereoWeighting& far = {});
 
 }  // namespace moslam::slam

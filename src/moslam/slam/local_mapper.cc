@@ -31,16 +31,6 @@ void AnchorGauge(const std::vector<std::shared_ptr<map::KeyFrame>>& poses, size_
   (*pose_fixed)[oldest] = true;
 }
 
-namespace {
-
-// Stereo depth bf / (u - u_right) beyond `close_depth` (ORB-SLAM2's "far" keypoint).
-bool IsFar(const optim::Observation& observation, double bf, double close_depth) {
-  const double disparity = observation.pixel.x() - observation.u_right;
-  return disparity <= 0.0 || bf / disparity > close_depth;
-}
-
-}  // namespace
-
 LocalMapper::LocalMapper(map::Map* map, const camera::PinholeCamera& camera, double bf,
                          const LocalMapperOptions& options)
     : map_(map), camera_(camera), model_(CameraModelFor(camera, bf)), options_(options) {}
@@ -201,12 +191,9 @@ void LocalMapper::LocalBundleAdjustment(const std::shared_ptr<map::KeyFrame>& ke
       edge.observation.pixel = Eigen::Vector2d(kp.pt.x, kp.pt.y);
       edge.observation.u_right = f.u_right[e.index];
       edge.observation.inv_sigma2 = f.inv_level_sigma2[kp.octave];
-      if (options_.far_stereo_as_monocular && edge.observation.is_stereo() &&
-          IsFar(edge.observation, model_.bf, options_.close_depth)) {
-        edge.observation.u_right = -1.0;
-      }
       problem.edges.push_back(edge);
     }
+    optim::WeighFarStereo({options_.far_stereo, options_.close_depth}, &problem);
   }
   last_adjustment_observations_ = edges.size();
   optim::BundleAdjusterOptions options;

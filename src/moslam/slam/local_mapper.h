@@ -25,18 +25,14 @@
 namespace moslam::slam {
 
 struct LocalMapperOptions {
-  // Metres (settings.CloseDepthMetres()): keyframe culling, and far_stereo_as_monocular.
+  // Metres (settings.CloseDepthMetres()): keyframe culling, and far_stereo.
   double close_depth = 0.0;
   // Local bundle adjustment after each keyframe (default on, as ORB-SLAM2); off only to measure
   // what it contributes (slam_eval --no-local-ba).
   bool local_bundle_adjustment = true;
-  // Bundle adjustment uses only [u, v] of stereo/RGB-D observations whose stereo depth is beyond
-  // close_depth (default off: ORB-SLAM2 keeps the u_right row of every stereo observation). The
-  // "far" keypoints of ORB-SLAM2's paper (Mur-Artal & Tardós 2017, Sec. III-A) carry little
-  // scale information and a sub-pixel disparity bias of the SAD/parabola matcher is a large depth
-  // bias there. An experiment switch (slam_eval --ba-far-monocular) until it is measured on more
-  // than one stereo sequence.
-  bool far_stereo_as_monocular = false;
+  // Bundle adjustment's weight of the u_right row of stereo observations beyond close_depth
+  // (optim::FarStereo; default kFull, as ORB-SLAM2; issue 29).
+  optim::FarStereo far_stereo = optim::FarStereo::kFull;
   // The keyframes local bundle adjustment moves: the new one and at most this many of its best
   // covisible keyframes (by shared points); the other keyframes that see the local points stay
   // fixed. 0: every covisible keyframe (ORB-SLAM2), which in a room the camera keeps looking

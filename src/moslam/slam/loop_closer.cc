@@ -291,7 +291,7 @@ void LoopCloser::StartGlobalBundleAdjustment() {
   GlobalBundleJob job;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
-    job = PrepareGlobalBundleAdjustment(*map_, model_);
+    job = PrepareGlobalBundleAdjustment(*map_, model_, options_.far_stereo);
   }
   if (options_.synchronous) {
     RunGlobalBundleAdjustment(std::move(job));

@@ -62,10 +62,12 @@ struct LoopCloserOptions {
   bool verify = true;
   LoopVerificationOptions verification;
   bool global_bundle_adjustment = true;  // after each closed loop
-  bool synchronous = false;              // global BA in the caller's thread (deterministic mode)
-  int num_threads = 1;                   // Ceres threads in the global BA
-  uint64_t seed = 1;                     // RANSAC (mixed with the keyframe id)
-  void Check() const;                    // InputError naming the field
+  // The global BA's weight of far stereo rows (as the local BA's, LocalMapperOptions::far_stereo).
+  optim::FarStereoWeighting far_stereo;
+  bool synchronous = false;  // global BA in the caller's thread (deterministic mode)
+  int num_threads = 1;       // Ceres threads in the global BA
+  uint64_t seed = 1;         // RANSAC (mixed with the keyframe id)
+  void Check() const;        // InputError naming the field
 };
 
 struct LoopCloserStats {

@@ -207,8 +207,8 @@ LoopCorrectionStats CorrectLoop(map::Map* map, const DetectedLoop& loop,
   return stats;
 }
 
-GlobalBundleJob PrepareGlobalBundleAdjustment(const map::Map& map,
-                                              const optim::CameraModel& camera) {
+GlobalBundleJob PrepareGlobalBundleAdjustment(const map::Map& map, const optim::CameraModel& camera,
+                                              const optim::FarStereoWeighting& far) {
   GlobalBundleJob job;
   job.generation = map.generation();
   job.problem.camera = camera;
@@ -243,6 +243,7 @@ GlobalBundleJob PrepareGlobalBundleAdjustment(const map::Map& map,
     job.point_ids.push_back(id);
     job.problem.points_world.push_back(p->position);
   }
+  optim::WeighFarStereo(far, &job.problem);
   return job;
 }
 

@@ -59,8 +59,9 @@ struct GlobalBundleJob {
   std::vector<uint64_t> point_ids;     // per point
   uint64_t generation = 0;             // Map::generation() when copied
 };
-GlobalBundleJob PrepareGlobalBundleAdjustment(const map::Map& map,
-                                              const optim::CameraModel& camera);
+// `far`: how far stereo rows are weighed (as in local bundle adjustment).
+GlobalBundleJob PrepareGlobalBundleAdjustment(const map::Map& map, const optim::CameraModel& camera,
+                                              const optim::FarStereoWeighting& far = {});
 // Without the lock.
 optim::BundleResult SolveGlobalBundleAdjustment(const GlobalBundleJob& job, int num_threads);
 // Writes the result back unless the map's generation changed since the copy (another loop was

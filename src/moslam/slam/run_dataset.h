@@ -80,6 +80,9 @@ struct DatasetRun {
   int frames_ok = 0;
   double ate_rmse = -1.0;           // metres, camera trajectory; < 0 without ground truth
   double keyframe_ate_rmse = -1.0;  // metres, keyframe trajectory; < 0 without ground truth
+  // Scale of the best Sim(3) alignment of the camera trajectory to the ground truth (1: the
+  // right scale; 0.99: the estimate is 1 % too long); 0 without ground truth.
+  double sim3_scale = 0.0;
   eval::Trajectory keyframes;
   double track_ms_median = 0.0;  // FrameReport::times.total_ms (wall clock)
   // CPU time of the calling (tracking) thread per Track() call: on a machine shared with other
@@ -158,6 +161,9 @@ inline DatasetRun RunDataset(const std::string& folder, const std::string& setti
       ate_options.alignment = eval::AlignmentMode::kSim3;
     }
     run.ate_rmse = eval::ComputeAte(gt, run.estimate, ate_options).translation.stats.rmse;
+    eval::AteOptions sim3_options = ate_options;
+    sim3_options.alignment = eval::AlignmentMode::kSim3;
+    run.sim3_scale = eval::ComputeAte(gt, run.estimate, sim3_options).alignment.scale();
     if (run.keyframes.size() >= 3) {
       run.keyframe_ate_rmse =
           eval::ComputeAte(gt, run.keyframes, ate_options).translation.stats.rmse;

@@ -53,6 +53,12 @@ const char* ToString(TrackingState state) {
   return "unknown";
 }
 
+optim::FarStereo SystemOptions::FarStereoPolicy() const {
+  if (far_stereo) return *far_stereo;
+  return sensor == io::SensorType::kStereo ? optim::FarStereo::kDepthWeighted
+                                           : optim::FarStereo::kFull;
+}
+
 void SystemOptions::Check() const {
   if (sensor != io::SensorType::kStereo && sensor != io::SensorType::kRgbD &&
       sensor != io::SensorType::kMonocular) {
@@ -180,7 +186,7 @@ class System::Impl : public KeyFrameSink {
     m.monocular = Mono(o);
     m.close_depth = o.settings.CloseDepthMetres();
     m.local_bundle_adjustment = o.local_bundle_adjustment;
-    m.far_stereo_as_monocular = o.ba_far_stereo_as_monocular;
+    m.far_stereo = o.FarStereoPolicy();
     m.max_local_keyframes = o.local_ba_keyframes;
     return m;
   }
@@ -188,6 +194,7 @@ class System::Impl : public KeyFrameSink {
     LoopCloserOptions l;
     l.fix_scale = !Mono(o);  // stereo/RGB-D maps have metric scale; monocular ones drift in scale
     l.global_bundle_adjustment = o.loop_global_bundle_adjustment;
+    l.far_stereo = {o.FarStereoPolicy(), o.settings.CloseDepthMetres()};
     l.verify = o.loop_verification;
     if (!o.loop_recent_word_weights) l.recent_word_keyframes = 0;
     // Monocular maps drift in scale as well as in pose: a correction may be a larger share of
@@ -201,6 +208,7 @@ class System::Impl : public KeyFrameSink {
     t.monocular = Mono(o);
     t.initializer.parallel = !o.deterministic;  // same result either way (fixed seed)
     t.close_depth = o.settings.CloseDepthMetres();
+    t.far_stereo = o.FarStereoPolicy();
     t.max_frames_between_keyframes = std::max(1, static_cast<int>(o.settings.fps));
     if (!o.short_loss_recovery) t.recovery_window = 0.0;
     t.movable.mask_evidence = o.movable_evidence;

@@ -22,6 +22,7 @@
 #include "moslam/geometry/se3.h"
 #include "moslam/io/orbslam_settings.h"
 #include "moslam/io/sequence.h"
+#include "moslam/optim/observation.h"
 
 namespace moslam::vocab {
 class Vocabulary;
@@ -61,8 +62,13 @@ struct SystemOptions {
   // Local bundle adjustment after each keyframe (LocalMapperOptions::local_bundle_adjustment);
   // off only for experiments that measure what it contributes.
   bool local_bundle_adjustment = true;
-  // LocalMapperOptions::far_stereo_as_monocular (default off, as ORB-SLAM2).
-  bool ba_far_stereo_as_monocular = false;
+  // How tracking, local and global bundle adjustment weigh the disparity of stereo observations
+  // beyond ThDepth (optim::FarStereo; LocalMapperOptions::far_stereo, TrackerOptions::far_stereo,
+  // LoopCloserOptions::far_stereo). Unset: kDepthWeighted for stereo, whose far disparities are
+  // biased on real images (issue 29, docs/EVALUATION.md "Stereo disparity bias"), kFull (as
+  // ORB-SLAM2) for RGB-D, whose depth sensor's disparity error does not grow that way.
+  std::optional<optim::FarStereo> far_stereo;
+  optim::FarStereo FarStereoPolicy() const;
   // LocalMapperOptions::max_local_keyframes (0: every covisible keyframe, as ORB-SLAM2).
   int local_ba_keyframes = 0;
   // Bag-of-words vocabulary (vocab::Vocabulary::Load: this project's binary format or

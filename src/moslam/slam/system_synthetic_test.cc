@@ -139,27 +139,29 @@ TEST(SystemSynthetic, DegradedMasksStayWithinTwiceTheExactMasksError) {
   EXPECT_GT(bare.ate_rmse, 3.0 * degraded.ate_rmse);
 }
 
-// A street of identical houses (issue 32's aliasing ring, docs/SYNTH.md) at the end of a corner:
-// at frame 233 of seed 3 the yaw rate drops from 16 deg/s to 0 at once, the constant-velocity
-// prediction is ~20 px off, and the motion model finds 122 of the last frame's 576 points, among
-// facades of identical windows. Taking its pose put the camera 1.7 m back, one window over, and
-// the next frames followed (4 m off by frame 236, 13 m by 240). With the cross-check against the
-// reference keyframe the camera stays on the street.
+// A street of identical houses (issue 32's aliasing ring, docs/SYNTH.md) at the end of a corner.
+// Found on seed 3: at frame 233 the yaw rate drops from 16 deg/s to 0 at once, the
+// constant-velocity prediction is ~20 px off, and the motion model finds 122 of the last frame's
+// 576 points, among facades of identical windows. Taking its pose put the camera 1.7 m back, one
+// window over, and the next frames followed (4 m off by frame 236, 13 m by 240). With the
+// cross-check against the reference keyframe the camera stays on the street. Issue 29's stereo
+// matcher changed which sequences trip it: seed 3 no longer does (0.088 m without the check),
+// seed 4 does (1.95 m without it, 0.024 m with it, measured).
 TEST(SystemSynthetic, AliasedFacadesAtTheEndOfACornerDoNotMoveTheCamera) {
   MOSLAM_SKIP_UNDER_SANITIZER("two deterministic 240-frame stereo runs of 1226 x 370 images");
   const testing::TempDir dir;
-  Generate("street_repeat_loop", 3, 240, dir);
+  Generate("street_repeat_loop", 4, 240, dir);
   const std::string settings = dir.path() + "/settings.yaml";
   const DatasetRun checked = RunDataset(dir.path(), settings, true, 0, "");
   const DatasetRun unchecked = RunDataset(dir.path(), settings, true, 0, "",
                                           [](SystemOptions* o) { o->motion_cross_check = false; });
-  std::printf("street_repeat_loop seed 3, 240 frames: ATE %.4f m, without the cross-check %.4f m\n",
+  std::printf("street_repeat_loop seed 4, 240 frames: ATE %.4f m, without the cross-check %.4f m\n",
               checked.ate_rmse, unchecked.ate_rmse);
   EXPECT_EQ(checked.frames_ok, 240);
   EXPECT_GE(checked.ate_rmse, 0.0);
   EXPECT_LT(checked.ate_rmse, 0.3);
   // The case is the one described: without the check the camera leaves the street.
-  EXPECT_GT(unchecked.ate_rmse, 0.5);  // measured 1.27 m
+  EXPECT_GT(unchecked.ate_rmse, 0.5);  // measured 1.95 m
 }
 
 }  // namespace

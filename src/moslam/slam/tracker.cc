@@ -453,15 +453,16 @@ int Tracker::OptimizeCurrentPose() {
       const double age = static_scores_.Age(current_.points[i]->id, t);
       support.push_back(1.0 + std::min(age, kSupportAge) / kSupportUnit);
     }
-    const optim::PoseConsensus consensus =
-        optim::FindPoseConsensus(model_, start, points, FrameObservations(current_.frame, index),
-                                 points_cam, options_.consensus, support);
+    const optim::PoseConsensus consensus = optim::FindPoseConsensus(
+        model_, start, points, FrameObservations(current_.frame, index, FarWeighting()), points_cam,
+        options_.consensus, support);
     start = consensus.T_cam_world;
     initial_outlier.resize(index.size());
     for (size_t k = 0; k < index.size(); ++k) initial_outlier[k] = !consensus.inlier[k];
   }
-  optim::PoseOptimizerResult result = OptimizeFramePose(
-      model_, current_.frame, index, points, start, options_.num_threads, weights, initial_outlier);
+  optim::PoseOptimizerResult result =
+      OptimizeFramePose(model_, current_.frame, index, points, start, options_.num_threads, weights,
+                        initial_outlier, FarWeighting());
   if (result.num_inliers < 3) return 0;
   if (!options_.monocular) CheckYoungPoints(index, points, start, &result);
   current_.T_cam_world = result.T_cam_world;

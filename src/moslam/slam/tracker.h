@@ -54,8 +54,10 @@ class KeyFrameSink {
 };
 
 struct TrackerOptions {
-  double close_depth = 0.0;   // metres (settings.CloseDepthMetres()): close/far threshold
-  int min_init_points = 500;  // depth points needed to initialize (ORB-SLAM2: 500)
+  double close_depth = 0.0;  // metres (settings.CloseDepthMetres()): close/far threshold
+  // Pose optimization's weight of far stereo rows (optim::FarStereo, beyond close_depth).
+  optim::FarStereo far_stereo = optim::FarStereo::kFull;
+  int min_init_points = 500;              // depth points needed to initialize (ORB-SLAM2: 500)
   int max_frames_between_keyframes = 10;  // ORB-SLAM2: fps
   int min_inliers = 30;                   // local-map inliers for "ok" (ORB-SLAM2: 30)
   int num_threads = 1;                    // for the pose optimizer
@@ -195,6 +197,9 @@ class Tracker {
   // this with the constant-velocity prediction.
   int TrackFromPrediction(const geometry::SE3& predicted, float radius_scale = 1.0f);
   int OptimizeCurrentPose();
+  optim::FarStereoWeighting FarWeighting() const {
+    return {options_.far_stereo, options_.close_depth};
+  }
   int DiscardOutliers();
   int TrackLocalMap(TrackOutcome* out);
   // Movable objects (tracker_movable.cc): the local points this frame did not match, judged by
