@@ -10,7 +10,6 @@
 #include <string>
 #include <vector>
 
-#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
 #include "moslam/util/error.h"
@@ -18,49 +17,16 @@
 
 namespace {
 
-using moslam::tools::ErrorStats;
 using moslam::tools::StereoSample;
 
-void PrintRow(const std::string& name, const ErrorStats& st) {
-  const double gross = st.n + st.gross > 0 ? 100.0 * st.gross / (st.n + st.gross) : 0.0;
-  std::printf("| %s | %d | %.1f | %+.4f | %.4f | %+.4f | %.4f | %+.3f | %+.3f |\n", name.c_str(),
-              st.n, gross, st.mean, st.sd, st.median, st.mad, 100.0 * st.depth_mean,
-              100.0 * st.depth_median);
-}
-
 void PrintTables(const std::vector<StereoSample>& samples, bool edges, double bf) {
-  const char* header =
-      "| %s | n | gross (%%) | mean err (px) | SD (px) | median err (px) | 1.48 MAD (px) | depth "
-      "err mean (%%) | depth err median (%%) |\n|---|---|---|---|---|---|---|---|---|\n";
-  std::printf("\n%s matches, per octave (error = estimate - truth, level-0 px):\n\n",
-              edges ? "Edge" : "Interior");
-  std::printf(header, "octave");
-  std::vector<const StereoSample*> all;
-  for (int o = 0; o < 8; ++o) {
-    std::vector<const StereoSample*> s;
-    for (const StereoSample& p : samples) {
-      if (p.edge == edges && p.octave == o) s.push_back(&p);
-    }
-    all.insert(all.end(), s.begin(), s.end());
-    if (!s.empty()) PrintRow(std::to_string(o), Summarise(s));
+  std::vector<const StereoSample*> selected;
+  for (const StereoSample& p : samples) {
+    if (p.edge == edges) selected.push_back(&p);
   }
-  PrintRow("all", Summarise(all));
-  std::printf("\n%s matches, per true depth:\n\n", edges ? "Edge" : "Interior");
-  std::printf(header, "depth (disparity)");
-  const double bounds[] = {0, 10, 20, 35, 45, 55, 75, 100, 150, 1e9};
-  for (int b = 0; b + 1 < 10; ++b) {
-    std::vector<const StereoSample*> s;
-    for (const StereoSample& p : samples) {
-      const double z = bf / p.truth;
-      if (p.edge == edges && z >= bounds[b] && z < bounds[b + 1]) s.push_back(&p);
-    }
-    if (s.empty()) continue;
-    const std::string name =
-        b + 2 < 10 ? fmt::format("{}-{} m ({:.1f}-{:.1f} px)", bounds[b], bounds[b + 1],
-                                 bf / bounds[b + 1], b > 0 ? bf / bounds[b] : 1e9)
-                   : fmt::format("> {} m (< {:.1f} px)", bounds[b], bf / bounds[b]);
-    PrintRow(name, Summarise(s));
-  }
+  // Depth bins in metres: ORB-SLAM2's stereo range on KITTI and beyond.
+  moslam::tools::PrintErrorTables(selected, edges ? "Edge matches" : "Interior matches", bf,
+                                  {0, 10, 20, 35, 45, 55, 75, 100, 150});
 }
 
 }  // namespace

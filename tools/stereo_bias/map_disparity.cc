@@ -12,15 +12,14 @@
 // the motion depth is far more precise than one stereo pair's. Points whose widest motion
 // baseline is under --min-baseline-ratio of their depth, or whose reprojection RMS exceeds 1 px,
 // are skipped. Every stereo observation of a kept point then gives the error of its disparity,
-// d_measured - bf / z_gt (level-0 px), printed per octave and per depth as Markdown tables.
+// d_measured - bf / z_gt (level-0 px), summarised per octave and per depth as stereo_bias does
+// (stereo_error.h: errors beyond two level pixels are counted as mismatches).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <map>
 #include <string>
 #include <vector>
 
-#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 #include <Eigen/Dense>
 
@@ -28,6 +27,7 @@
 #include "moslam/map/map.h"
 #include "moslam/mapio/map_file.h"
 #include "moslam/util/error.h"
+#include "stereo_error.h"
 
 namespace {
 
@@ -35,15 +35,10 @@ using moslam::geometry::SE3;
 
 struct View {
   SE3 T_cam_world;
+  Eigen::Vector3d centre;  // world
   Eigen::Vector2d pixel;
   double u_right = -1.0;
   int octave = 0;
-};
-
-struct Sample {
-  int octave = 0;
-  double depth = 0.0;  // metres, ground truth (motion triangulation)
-  double error = 0.0;  // measured - true disparity, level-0 px
 };
 
 struct Intrinsics {
@@ -97,29 +92,13 @@ bool Triangulate(const std::vector<View>& views, const Intrinsics& k, Eigen::Vec
   return true;
 }
 
-void PrintRow(const std::string& name, std::vector<double> e, double mean_depth_rel) {
-  if (e.empty()) return;
-  std::sort(e.begin(), e.end());
-  const double median = e[e.size() / 2];
-  double mean = 0.0;
-  for (double x : e) mean += x;
-  mean /= static_cast<double>(e.size());
-  std::vector<double> dev;
-  for (double x : e) dev.push_back(std::abs(x - median));
-  std::sort(dev.begin(), dev.end());
-  // Standard error of the mean from the robust spread: whether a bias differs from zero.
-  const double mad = 1.4826 * dev[dev.size() / 2];
-  std::printf("| %s | %zu | %+.4f | %+.4f | %.4f | %.4f | %+.3f |\n", name.c_str(), e.size(), mean,
-              median, mad, mad / std::sqrt(static_cast<double>(e.size())), 100.0 * mean_depth_rel);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Disparity error of a stereo map against depths triangulated from ground truth"};
   std::string map_path, poses_path, times_path;
   int min_views = 4;
-  double min_baseline_ratio = 0.1, max_error = 3.0;
+  double min_baseline_ratio = 0.1;
   app.add_option("map", map_path, "Map file (moslam run --save-map)")->required();
   app.add_option("poses", poses_path, "KITTI poses.txt of the sequence")->required();
   app.add_option("times", times_path, "KITTI times.txt of the sequence")->required();
@@ -127,8 +106,6 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--min-baseline-ratio", min_baseline_ratio,
                  "Widest motion baseline / depth a point needs")
-      ->capture_default_str();
-  app.add_option("--max-error", max_error, "Errors beyond this (level-0 px) are mismatches")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
@@ -144,8 +121,8 @@ int main(int argc, char** argv) {
       if (it == gt.timestamps.end() || std::abs(*it - t) > 1e-4) return nullptr;
       return &gt.poses[it - gt.timestamps.begin()];
     };
-    std::vector<Sample> samples;
-    int points = 0, kept = 0, gross = 0;
+    std::vector<moslam::tools::StereoSample> samples;
+    int points = 0, kept = 0;
     for (const auto& [id, point] : map.points()) {
       if (point->bad) continue;
       std::vector<View> views;
@@ -155,8 +132,9 @@ int main(int argc, char** argv) {
         const SE3* T_world_cam = gt_pose(kf->frame.timestamp);
         if (T_world_cam == nullptr) continue;
         const cv::KeyPoint& kp = kf->frame.keypoints_undistorted[obs.index];
-        views.push_back({T_world_cam->Inverse(), Eigen::Vector2d(kp.pt.x, kp.pt.y),
-                         kf->frame.u_right[obs.index], kp.octave});
+        views.push_back({T_world_cam->Inverse(), T_world_cam->translation(),
+                         Eigen::Vector2d(kp.pt.x, kp.pt.y), kf->frame.u_right[obs.index],
+                         kp.octave});
       }
       if (static_cast<int>(views.size()) < min_views) continue;
       ++points;
@@ -166,58 +144,27 @@ int main(int argc, char** argv) {
       double widest = 0.0, depth = 0.0;
       for (const View& a : views) {
         depth = std::max(depth, (a.T_cam_world * X).z());
-        for (const View& b : views) {
-          widest = std::max(widest, (a.T_cam_world.Inverse().translation() -
-                                     b.T_cam_world.Inverse().translation())
-                                        .norm());
-        }
+        for (const View& b : views) widest = std::max(widest, (a.centre - b.centre).norm());
       }
       if (widest < min_baseline_ratio * depth) continue;
       ++kept;
       for (const View& v : views) {
         if (v.u_right < 0.0) continue;
-        const double z = (v.T_cam_world * X).z();
-        const double error = (v.pixel.x() - v.u_right) - k.bf / z;
-        if (std::abs(error) > max_error) {
-          ++gross;
-          continue;
-        }
-        samples.push_back({v.octave, z, error});
+        moslam::tools::StereoSample sample;
+        sample.octave = v.octave;
+        sample.truth = k.bf / (v.T_cam_world * X).z();
+        sample.estimate = v.pixel.x() - v.u_right;
+        samples.push_back(sample);
       }
     }
     std::printf(
         "%d points seen by >= %d keyframes, %d triangulated and kept; %zu stereo "
-        "observations, %d beyond %.1f px left out\n\n",
-        points, min_views, kept, samples.size(), gross, max_error);
-    const char* header =
-        "| %s | n | mean err (px) | median err (px) | 1.48 MAD (px) | MAD / sqrt(n) | depth err "
-        "from mean (%%) |\n|---|---|---|---|---|---|---|\n";
-    std::printf(header, "octave");
-    for (int o = 0; o < 8; ++o) {
-      std::vector<double> e;
-      double rel = 0.0;
-      for (const Sample& s : samples) {
-        if (s.octave != o) continue;
-        e.push_back(s.error);
-        rel += -s.error / (k.bf / s.depth);
-      }
-      if (!e.empty()) PrintRow(std::to_string(o), e, rel / static_cast<double>(e.size()));
-    }
-    std::printf("\n");
-    std::printf(header, "depth");
-    const double bounds[] = {0, 5, 10, 15, 20, 30, 45, 70, 1e9};
-    for (int b = 0; b + 1 < 9; ++b) {
-      std::vector<double> e;
-      double rel = 0.0;
-      for (const Sample& s : samples) {
-        if (s.depth < bounds[b] || s.depth >= bounds[b + 1]) continue;
-        e.push_back(s.error);
-        rel += -s.error / (k.bf / s.depth);
-      }
-      const std::string name = b + 2 < 9 ? fmt::format("{}-{} m", bounds[b], bounds[b + 1])
-                                         : fmt::format(">= {} m", bounds[b]);
-      if (!e.empty()) PrintRow(name, e, rel / static_cast<double>(e.size()));
-    }
+        "observations\n",
+        points, min_views, kept, samples.size());
+    std::vector<const moslam::tools::StereoSample*> all;
+    for (const auto& sample : samples) all.push_back(&sample);
+    moslam::tools::PrintErrorTables(all, "Stereo observations", k.bf,
+                                    {0, 5, 10, 15, 20, 30, 45, 70});
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stereo_map_bias: %s\n", e.what());
     return 2;

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+
+#include <fmt/format.h>
 
 #include <opencv2/imgproc.hpp>
 
@@ -167,6 +170,53 @@ ErrorStats Summarise(const std::vector<const StereoSample*>& s) {
   st.mad = 1.4826 * median(dev);
   st.depth_median = median(rel);
   return st;
+}
+
+namespace {
+
+void PrintRow(const std::string& name, const ErrorStats& st) {
+  const double gross = st.n + st.gross > 0 ? 100.0 * st.gross / (st.n + st.gross) : 0.0;
+  std::printf("| %s | %d | %.1f | %+.4f | %.4f | %+.4f | %.4f | %+.3f | %+.3f |\n", name.c_str(),
+              st.n, gross, st.mean, st.sd, st.median, st.mad, 100.0 * st.depth_mean,
+              100.0 * st.depth_median);
+}
+
+}  // namespace
+
+void PrintErrorTables(const std::vector<const StereoSample*>& samples, const std::string& title,
+                      double bf, const std::vector<double>& depth_bounds) {
+  const char* header =
+      "| %s | n | gross (%%) | mean err (px) | SD (px) | median err (px) | 1.48 MAD (px) | depth "
+      "err mean (%%) | depth err median (%%) |\n|---|---|---|---|---|---|---|---|---|\n";
+  std::printf("\n%s, per octave (error = estimate - truth, level-0 px):\n\n", title.c_str());
+  std::printf(header, "octave");
+  std::vector<const StereoSample*> all;
+  for (int o = 0; o < 8; ++o) {
+    std::vector<const StereoSample*> s;
+    for (const StereoSample* p : samples) {
+      if (p->octave == o) s.push_back(p);
+    }
+    all.insert(all.end(), s.begin(), s.end());
+    if (!s.empty()) PrintRow(std::to_string(o), Summarise(s));
+  }
+  PrintRow("all", Summarise(all));
+  std::printf("\n%s, per true depth:\n\n", title.c_str());
+  std::printf(header, "depth (disparity)");
+  for (size_t b = 0; b < depth_bounds.size(); ++b) {
+    const bool last = b + 1 == depth_bounds.size();
+    const double lo = depth_bounds[b], hi = last ? 1e9 : depth_bounds[b + 1];
+    std::vector<const StereoSample*> s;
+    for (const StereoSample* p : samples) {
+      const double z = bf / p->truth;
+      if (z >= lo && z < hi) s.push_back(p);
+    }
+    if (s.empty()) continue;
+    const std::string name =
+        last     ? fmt::format("> {} m (< {:.1f} px)", lo, bf / lo)
+        : b == 0 ? fmt::format("{}-{} m (> {:.1f} px)", lo, hi, bf / hi)
+                 : fmt::format("{}-{} m ({:.1f}-{:.1f} px)", lo, hi, bf / hi, bf / lo);
+    PrintRow(name, Summarise(s));
+  }
 }
 
 }  // namespace moslam::tools

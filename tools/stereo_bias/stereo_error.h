@@ -56,4 +56,10 @@ struct ErrorStats {
 };
 ErrorStats Summarise(const std::vector<const StereoSample*>& samples);
 
+// Prints Summarise of `samples` as two Markdown tables, per octave and per true depth
+// (`depth_bounds`: metres, ascending, starting at 0; the last bin is open), headed by
+// "`title`, per octave" and "`title`, per true depth". `bf` converts disparities to depths.
+void PrintErrorTables(const std::vector<const StereoSample*>& samples, const std::string& title,
+                      double bf, const std::vector<double>& depth_bounds);
+
 }  // namespace moslam::tools

@@ -138,10 +138,10 @@ Refined RefineOnLevel(const cv::KeyPoint& left_kp, float u_right0, const OrbExtr
   return Refined{left_ex.scale_factors()[level] * (static_cast<float>(ur0) + offset), sad};
 }
 
-// The level's match refined on level 0 (issue 29): a window of patch_half_size * scale pixels
-// (at most level0_max_half_size)
-// around the level-0 position of the keypoint's level pixel, (x_l + 0.5) * W / w_l - 0.5 (the
-// pixel centres of cv::resize), searched over +-(scale + 1) pixels around the level's disparity.
+// The level's match refined on level 0 (issue 29): a window of patch_half_size * scale pixels (at
+// most level0_max_half_size) around the level-0 position of the keypoint's level pixel,
+// (x_l + 0.5) * W / w_l - 0.5 (the pixel centres of cv::resize), searched over +-(scale + 1)
+// pixels around the level's disparity.
 // The disparity found holds for that window's centre; the returned u_right keeps it relative to
 // the keypoint's nominal x (x_l * scale), which the rest of the system uses.
 Refined RefineOnLevel0(const cv::KeyPoint& left_kp, const Refined& coarse,

@@ -259,15 +259,8 @@ BundleResult AdjustBundle(const BundleProblem& problem, const BundleAdjusterOpti
 }
 
 void WeighFarStereo(const FarStereoWeighting& far, BundleProblem* problem) {
-  if (far.policy == FarStereo::kFull) return;
-  size_t close = 0;
-  for (const BundleProblem::Edge& e : problem->edges) {
-    close += far.IsClose(problem->camera.bf, e.observation);
-  }
-  const double strength = FarStereoWeighting::Strength(close, problem->T_cam_world.size());
-  for (BundleProblem::Edge& e : problem->edges) {
-    far.Apply(problem->camera.bf, strength, &e.observation);
-  }
+  far.ApplyToAll(problem->camera.bf, problem->T_cam_world.size(), problem->edges,
+                 [](BundleProblem::Edge& e) -> Observation& { return e.observation; });
 }
 
 }  // namespace moslam::optim

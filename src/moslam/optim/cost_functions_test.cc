@@ -3,6 +3,7 @@
 #include "moslam/optim/cost_functions.h"
 
 #include <array>
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -143,24 +144,37 @@ TEST(CostFunctions, StereoBundleJacobiansMatchNumeric) {
   }
 }
 
-TEST(CostFunctions, ResidualIsWhitenedReprojectionError) {
-  const CameraModel camera = test::TestCamera();
-  const Eigen::Vector3d p_cam(0.4, -0.2, 4.0);
-  const Eigen::Vector3d ideal = test::Project(camera, p_cam);
+// The residual tests' point, 4 m in front of an identity pose, and an observation of it 1 px
+// right and 2 px down of its projection with u_right 3 px right of its own.
+Eigen::Vector3d ResidualPoint() { return Eigen::Vector3d(0.4, -0.2, 4.0); }
+Observation OffsetObservation(const CameraModel& camera) {
+  const Eigen::Vector3d ideal = test::Project(camera, ResidualPoint());
   Observation observation;
   observation.pixel = ideal.head<2>() + Eigen::Vector2d(1.0, -2.0);
   observation.u_right = ideal.z() + 3.0;
-  observation.inv_sigma2 = 0.25;  // sigma 2 px
+  return observation;
+}
+
+// The stereo residual of `observation` of ResidualPoint() at the identity pose.
+Eigen::Vector3d StereoResidual(const CameraModel& camera, const Observation& observation) {
   std::array<double, kPoseSize> pose;
   PackPose(geometry::SE3(), pose.data());
   const double* blocks[] = {pose.data()};
-  Eigen::Vector3d r = Eigen::Vector3d::Zero();
-  ASSERT_TRUE(
-      PoseReprojectionCost<3>(camera, observation, p_cam).Evaluate(blocks, r.data(), nullptr));
+  Eigen::Vector3d r = Eigen::Vector3d::Constant(std::nan(""));
+  EXPECT_TRUE(PoseReprojectionCost<3>(camera, observation, ResidualPoint())
+                  .Evaluate(blocks, r.data(), nullptr));
+  return r;
+}
+
+TEST(CostFunctions, ResidualIsWhitenedReprojectionError) {
+  const CameraModel camera = test::TestCamera();
+  Observation observation = OffsetObservation(camera);
+  observation.inv_sigma2 = 0.25;  // sigma 2 px
+  const Eigen::Vector3d r = StereoResidual(camera, observation);
   EXPECT_TRUE(geometry::test::MatricesNear(r, Eigen::Vector3d(-0.5, 1.0, -1.5), 1e-12));
-  EXPECT_NEAR(ChiSquare(camera, observation, p_cam), r.squaredNorm(), 1e-12);
+  EXPECT_NEAR(ChiSquare(camera, observation, ResidualPoint()), r.squaredNorm(), 1e-12);
   observation.u_right = -1.0;
-  EXPECT_NEAR(ChiSquare(camera, observation, p_cam), 1.25, 1e-12);
+  EXPECT_NEAR(ChiSquare(camera, observation, ResidualPoint()), 1.25, 1e-12);
 }
 
 // A far stereo row with a scaled information (FarStereoWeighting, issue 29): its residual and
@@ -179,21 +193,12 @@ TEST(CostFunctions, ScaledRightRowJacobiansMatchNumeric) {
 
 TEST(CostFunctions, ScaledRightRowWeighsOnlyTheDisparity) {
   const CameraModel camera = test::TestCamera();
-  const Eigen::Vector3d p_cam(0.4, -0.2, 4.0);
-  const Eigen::Vector3d ideal = test::Project(camera, p_cam);
-  Observation observation;
-  observation.pixel = ideal.head<2>() + Eigen::Vector2d(1.0, -2.0);
-  observation.u_right = ideal.z() + 3.0;
+  Observation observation = OffsetObservation(camera);
   observation.right_info_scale = 0.25;
-  std::array<double, kPoseSize> pose;
-  PackPose(geometry::SE3(), pose.data());
-  const double* blocks[] = {pose.data()};
-  Eigen::Vector3d r = Eigen::Vector3d::Zero();
-  ASSERT_TRUE(
-      PoseReprojectionCost<3>(camera, observation, p_cam).Evaluate(blocks, r.data(), nullptr));
+  const Eigen::Vector3d r = StereoResidual(camera, observation);
   // u and v rows at sigma 1 px; the u_right row's -3 px halved (sqrt(0.25)).
   EXPECT_TRUE(geometry::test::MatricesNear(r, Eigen::Vector3d(-1.0, 2.0, -1.5), 1e-12));
-  EXPECT_NEAR(ChiSquare(camera, observation, p_cam), r.squaredNorm(), 1e-12);
+  EXPECT_NEAR(ChiSquare(camera, observation, ResidualPoint()), r.squaredNorm(), 1e-12);
 }
 
 TEST(FarStereoWeighting, WeighsOnlyStereoRowsBeyondTheCloseDepth) {

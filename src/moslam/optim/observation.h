@@ -3,6 +3,8 @@
 // into these structs and writes the results back, so the problems can be built and tested alone.
 #pragma once
 
+#include <cstddef>
+
 #include <Eigen/Core>
 
 namespace moslam::optim {
@@ -44,7 +46,7 @@ inline constexpr double kChi2Stereo = 7.815;
 //    under kCloseObservationsPerPoseNone (half of that), blended linearly between: on an open
 //    road (synthetic open_road: 23-26 close matches a frame) the far disparities are the only
 //    scale there is; a street (KITTI 06: median 102, 10 % of frames under 67) has near points. On
-//    real stereo (KITTI 06) the disparities of points 20-45 m away are biased by -0.14 to -0.22 px
+//    real stereo (KITTI 06) the disparities of points 20-45 m away are biased by -0.15 to -0.23 px
 //    against depths triangulated from ground-truth poses, where synthetic pairs show under 0.03 px:
 //    an error that does not average out over points, and through z = bf / d a trajectory 0.2-0.3 %
 //    too long (issue 29; docs/EVALUATION.md "Stereo disparity bias").
@@ -66,6 +68,16 @@ struct FarStereoWeighting {
   // Applies the policy to `observation` (nothing for a monocular one or one within close_depth);
   // kDepthWeighted scales the information by max((close_depth / z)^2, 1 - strength).
   void Apply(double bf, double strength, Observation* observation) const;
+  // Apply to the observation get(item) of every item, with the strength of their close stereo
+  // observations over `poses` poses (one problem: a frame's matches, a bundle's edges).
+  template <class Items, class Get>
+  void ApplyToAll(double bf, size_t poses, Items& items, Get get) const {
+    if (policy == FarStereo::kFull) return;
+    size_t close = 0;
+    for (auto& item : items) close += IsClose(bf, get(item));
+    const double strength = Strength(close, poses);
+    for (auto& item : items) Apply(bf, strength, &get(item));
+  }
 };
 
 }  // namespace moslam::optim

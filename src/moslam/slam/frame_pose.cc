@@ -17,24 +17,23 @@ std::vector<optim::Observation> FrameObservations(const feature::Frame& frame,
     obs.inv_sigma2 = frame.inv_level_sigma2[kp.octave];
     observations.push_back(obs);
   }
-  size_t close = 0;
-  for (const optim::Observation& obs : observations) close += far.IsClose(frame.bf, obs);
-  const double strength = optim::FarStereoWeighting::Strength(close, 1);
-  for (optim::Observation& obs : observations) far.Apply(frame.bf, strength, &obs);
+  far.ApplyToAll(frame.bf, 1, observations,
+                 [](optim::Observation& o) -> optim::Observation& { return o; });
   return observations;
 }
 
-optim::PoseOptimizerResult OptimizeFramePose(
-    const optim::CameraModel& camera, const feature::Frame& frame,
-    const std::vector<size_t>& indices, const std::vector<Eigen::Vector3d>& points_world,
-    const geometry::SE3& T_cam_world_init, int num_threads, const std::vector<double>& weights,
-    const std::vector<bool>& initial_outlier, const optim::FarStereoWeighting& far) {
+optim::PoseOptimizerResult OptimizeFramePose(const optim::CameraModel& camera,
+                                             const feature::Frame& frame,
+                                             const std::vector<size_t>& indices,
+                                             const std::vector<Eigen::Vector3d>& points_world,
+                                             const geometry::SE3& T_cam_world_init, int num_threads,
+                                             const std::vector<double>& weights,
+                                             const std::vector<bool>& initial_outlier) {
   MOSLAM_CHECK(indices.size() == points_world.size());
   optim::PoseOptimizerOptions options;
   options.num_threads = num_threads;
   return optim::OptimizePose(camera, T_cam_world_init, points_world,
-                             FrameObservations(frame, indices, far), options, initial_outlier,
-                             weights);
+                             FrameObservations(frame, indices), options, initial_outlier, weights);
 }
 
 }  // namespace moslam::slam

@@ -23,12 +23,11 @@ std::vector<optim::Observation> FrameObservations(const feature::Frame& frame,
 
 // points_world[k] is matched to keypoint indices[k] of `frame` (same size: CHECK). `weights`:
 // empty, or one per match in (0, 1]; `initial_outlier`: empty, or one flag per match
-// (optim::OptimizePose); `far`: how far stereo rows are weighed.
+// (optim::OptimizePose). Far stereo rows at full weight (optim::FarStereo::kFull).
 optim::PoseOptimizerResult OptimizeFramePose(
     const optim::CameraModel& camera, const feature::Frame& frame,
     const std::vector<size_t>& indices, const std::vector<Eigen::Vector3d>& points_world,
     const geometry::SE3& T_cam_world_init, int num_threads = 1,
-    const std::vector<double>& weights = {}, const std::vector<bool>& initial_outlier = {},
-    const optim::FarStereoWeighting& far = {});
+    const std::vector<double>& weights = {}, const std::vector<bool>& initial_outlier = {});
 
 }  // namespace moslam::slam

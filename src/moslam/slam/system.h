@@ -66,7 +66,7 @@ struct SystemOptions {
   // beyond ThDepth (optim::FarStereo; LocalMapperOptions::far_stereo, TrackerOptions::far_stereo,
   // LoopCloserOptions::far_stereo). Unset: kDepthWeighted for stereo, whose far disparities are
   // biased on real images (issue 29, docs/EVALUATION.md "Stereo disparity bias"), kFull (as
-  // ORB-SLAM2) for RGB-D, whose depth sensor's disparity error does not grow that way.
+  // ORB-SLAM2) for RGB-D, where no such bias was measured and every result stays as it was.
   std::optional<optim::FarStereo> far_stereo;
   optim::FarStereo FarStereoPolicy() const;
   // LocalMapperOptions::max_local_keyframes (0: every covisible keyframe, as ORB-SLAM2).

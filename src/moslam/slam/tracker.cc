@@ -441,6 +441,8 @@ int Tracker::OptimizeCurrentPose() {
   if (!weighted) weights.clear();  // all 1: the unweighted problem, bit for bit
   geometry::SE3 start = current_.T_cam_world;
   std::vector<bool> initial_outlier;
+  const std::vector<optim::Observation> observations =
+      FrameObservations(current_.frame, index, FarWeighting());
   if (options_.pose_consensus && !options_.monocular) {
     std::vector<Eigen::Vector3d> points_cam;
     std::vector<double> support;
@@ -454,15 +456,15 @@ int Tracker::OptimizeCurrentPose() {
       support.push_back(1.0 + std::min(age, kSupportAge) / kSupportUnit);
     }
     const optim::PoseConsensus consensus = optim::FindPoseConsensus(
-        model_, start, points, FrameObservations(current_.frame, index, FarWeighting()), points_cam,
-        options_.consensus, support);
+        model_, start, points, observations, points_cam, options_.consensus, support);
     start = consensus.T_cam_world;
     initial_outlier.resize(index.size());
     for (size_t k = 0; k < index.size(); ++k) initial_outlier[k] = !consensus.inlier[k];
   }
-  optim::PoseOptimizerResult result =
-      OptimizeFramePose(model_, current_.frame, index, points, start, options_.num_threads, weights,
-                        initial_outlier, FarWeighting());
+  optim::PoseOptimizerOptions pose_options;
+  pose_options.num_threads = options_.num_threads;
+  optim::PoseOptimizerResult result = optim::OptimizePose(model_, start, points, observations,
+                                                          pose_options, initial_outlier, weights);
   if (result.num_inliers < 3) return 0;
   if (!options_.monocular) CheckYoungPoints(index, points, start, &result);
   current_.T_cam_world = result.T_cam_world;

@@ -303,6 +303,31 @@ camera::PinholeOptions KittiCamera(int width, int height) {
   return ScaledCamera(707.0912, 707.0912, 601.8873, 183.1104, 1226, 370, width, height);
 }
 
+namespace {
+
+// A stereo car (KITTI's camera and baseline) driving along +x in a lane, with a little sway.
+struct Drive {
+  double min_speed, max_speed;  // m/s, drawn once
+  double lane;                  // metres (y)
+  double yaw_sway;              // radians
+  double gaze_rise;             // metres: height of the gaze point 10 m ahead over the eye
+};
+void SetDrivingCamera(const Drive& drive, int width, int height, Rng& rng, SequenceSpec* spec) {
+  spec->camera = KittiCamera(width > 0 ? width : 1226, height > 0 ? height : 370);
+  spec->baseline_m = 0.537;
+  spec->lighting.direction_world = Vector3d(0.3, 0.5, -0.8);
+  spec->lighting.ambient = 0.6f;
+  const double speed = rng.Uniform(drive.min_speed, drive.max_speed), lane = drive.lane;
+  const double gaze_rise = drive.gaze_rise;
+  std::array<Wobble, 2> sway = {Wobble(rng, 0.05, 4, 8), Wobble(rng, drive.yaw_sway, 3, 6)};
+  spec->T_world_cam = [speed, lane, gaze_rise, sway](double t) {
+    const Vector3d eye(speed * t, lane + sway[0](t), 1.65);
+    return Rotate(LookAt(eye, eye + Vector3d(10, 0, gaze_rise)), 0, sway[1](t), 0);
+  };
+}
+
+}  // namespace
+
 SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet& textures,
                         int width, int height, PeopleStyle people_style) {
   SequenceSpec spec;
@@ -319,31 +344,13 @@ SequenceSpec MakePreset(const std::string& name, uint64_t seed, const TextureSet
     return spec;
   }
   if (name == "open_road") {
-    spec.camera = KittiCamera(width > 0 ? width : 1226, height > 0 ? height : 370);
-    spec.baseline_m = 0.537;
     BuildOpenRoad(b);
-    spec.lighting.direction_world = Vector3d(0.3, 0.5, -0.8);
-    spec.lighting.ambient = 0.6f;
-    const double speed = rng.Uniform(24, 26), lane = -2.0;
-    std::array<Wobble, 2> sway = {Wobble(rng, 0.05, 4, 8), Wobble(rng, 0.01, 3, 6)};
-    spec.T_world_cam = [speed, lane, sway](double t) {
-      const Vector3d eye(speed * t, lane + sway[0](t), 1.65);
-      return Rotate(LookAt(eye, eye + Vector3d(10, 0, -0.1)), 0, sway[1](t), 0);
-    };
+    SetDrivingCamera({24.0, 26.0, -2.0, 0.01, -0.1}, width, height, rng, &spec);
     return spec;
   }
   if (spec.info.stereo) {
-    spec.camera = KittiCamera(width > 0 ? width : 1226, height > 0 ? height : 370);
-    spec.baseline_m = 0.537;
     BuildStreet(b);
-    spec.lighting.direction_world = Vector3d(0.3, 0.5, -0.8);
-    spec.lighting.ambient = 0.6f;
-    const double speed = rng.Uniform(7, 9), lane = -2.2;
-    std::array<Wobble, 2> sway = {Wobble(rng, 0.05, 4, 8), Wobble(rng, 0.02, 3, 6)};
-    spec.T_world_cam = [speed, lane, sway](double t) {
-      const Vector3d eye(speed * t, lane + sway[0](t), 1.65);
-      return Rotate(LookAt(eye, eye + Vector3d(10, 0, -0.3)), 0, sway[1](t), 0);
-    };
+    SetDrivingCamera({7.0, 9.0, -2.2, 0.02, -0.3}, width, height, rng, &spec);
     return spec;
   }
   spec.camera = TumCamera(width > 0 ? width : 640, height > 0 ? height : 480);
