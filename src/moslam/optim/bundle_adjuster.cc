@@ -7,6 +7,7 @@
 #include <ceres/ceres.h>
 
 #include "moslam/optim/cost_functions.h"
+#include "moslam/optim/schur_lm.h"
 #include "moslam/optim/solver_util.h"
 #include "moslam/util/check.h"
 #include "moslam/util/error.h"
@@ -28,6 +29,10 @@ void BundleAdjusterOptions::Check() const {
   }
   if (num_threads < 1) {
     ThrowInput("BundleAdjusterOptions.num_threads must be >= 1 (got {})", num_threads);
+  }
+  if (schur_lm_max_poses < 0) {
+    ThrowInput("BundleAdjusterOptions.schur_lm_max_poses must be >= 0 (got {})",
+               schur_lm_max_poses);
   }
   if (dense_schur_max_poses < 0) {
     ThrowInput("BundleAdjusterOptions.dense_schur_max_poses must be >= 0 (got {})",
@@ -80,22 +85,15 @@ std::vector<double> EdgeChiSquares(const BundleProblem& problem, const State& st
 class Stage {
  public:
   Stage(const BundleProblem& problem, const BundleAdjusterOptions& options, State* state)
-      : problem_(problem), options_(options), state_(state) {
-    for (const BundleProblem::Edge& edge : problem.edges) {
-      if (edge.observation.is_stereo()) {
-        costs_.push_back(
-            std::make_unique<BundleReprojectionCost<3>>(problem.camera, edge.observation));
-      } else {
-        costs_.push_back(
-            std::make_unique<BundleReprojectionCost<2>>(problem.camera, edge.observation));
-      }
-    }
-  }
+      : problem_(problem), options_(options), state_(state) {}
 
   // Levenberg-Marquardt over the edges with active[e]; returns the iterations run.
   int Run(const std::vector<bool>& active, bool robust, int iterations);
 
  private:
+  int RunCeres(const std::vector<bool>& active, bool robust, int iterations,
+               const std::vector<bool>& pose_used, const std::vector<bool>& point_used,
+               int free_poses, int free_points);
   ceres::Solver::Options SolverOptions(int iterations, int free_poses, int free_points,
                                        const std::vector<double*>& pose_blocks,
                                        const std::vector<double*>& point_blocks) const;
@@ -123,10 +121,49 @@ class Stage {
 
 int Stage::Run(const std::vector<bool>& active, bool robust, int iterations) {
   if (iterations == 0) return 0;
-  ceres::Problem ceres_problem(BorrowingProblemOptions());
   const int num_poses = static_cast<int>(problem_.T_cam_world.size());
   const int num_points = static_cast<int>(problem_.points_world.size());
   std::vector<bool> pose_used(num_poses, false), point_used(num_points, false);
+  for (size_t e = 0; e < problem_.edges.size(); ++e) {
+    if (!active[e]) continue;
+    pose_used[problem_.edges[e].pose] = true;
+    point_used[problem_.edges[e].point] = true;
+  }
+  int free_poses = 0, free_points = 0;
+  for (int i = 0; i < num_poses; ++i) free_poses += pose_used[i] && !problem_.pose_fixed[i];
+  for (int j = 0; j < num_points; ++j) {
+    free_points += point_used[j] && (problem_.point_fixed.empty() || !problem_.point_fixed[j]);
+  }
+  if (free_poses + free_points == 0) return 0;
+  if (options_.solver == BundleAdjusterOptions::Solver::kSchurLM &&
+      free_poses <= options_.schur_lm_max_poses) {
+    internal::SchurLMOptions lm;
+    lm.max_iterations = iterations;
+    lm.robust = robust;
+    lm.chi2_mono = options_.chi2_mono;
+    lm.chi2_stereo = options_.chi2_stereo;
+    lm.stop = options_.stop;
+    return internal::SolveSchurLM(problem_, active, lm, state_->poses.data(), state_->points.data())
+        .iterations;
+  }
+  return RunCeres(active, robust, iterations, pose_used, point_used, free_poses, free_points);
+}
+
+int Stage::RunCeres(const std::vector<bool>& active, bool robust, int iterations,
+                    const std::vector<bool>& pose_used, const std::vector<bool>& point_used,
+                    int free_poses, int free_points) {
+  if (costs_.empty()) {  // built once, for both stages
+    for (const BundleProblem::Edge& edge : problem_.edges) {
+      if (edge.observation.is_stereo()) {
+        costs_.push_back(
+            std::make_unique<BundleReprojectionCost<3>>(problem_.camera, edge.observation));
+      } else {
+        costs_.push_back(
+            std::make_unique<BundleReprojectionCost<2>>(problem_.camera, edge.observation));
+      }
+    }
+  }
+  ceres::Problem ceres_problem(BorrowingProblemOptions());
   for (size_t e = 0; e < problem_.edges.size(); ++e) {
     if (!active[e]) continue;
     const BundleProblem::Edge& edge = problem_.edges[e];
@@ -134,31 +171,23 @@ int Stage::Run(const std::vector<bool>& active, bool robust, int iterations) {
     if (robust) loss = edge.observation.is_stereo() ? &huber_stereo_ : &huber_mono_;
     ceres_problem.AddResidualBlock(costs_[e].get(), loss, state_->pose(edge.pose),
                                    state_->point(edge.point));
-    pose_used[edge.pose] = true;
-    point_used[edge.point] = true;
   }
   std::vector<double*> pose_blocks, point_blocks;
-  int free_poses = 0, free_points = 0;
-  for (int i = 0; i < num_poses; ++i) {
+  for (size_t i = 0; i < pose_used.size(); ++i) {
     if (!pose_used[i]) continue;
-    pose_blocks.push_back(state_->pose(i));
-    ceres_problem.SetManifold(state_->pose(i), &manifold_);
-    if (problem_.pose_fixed[i]) {
-      ceres_problem.SetParameterBlockConstant(state_->pose(i));
-    } else {
-      ++free_poses;
-    }
+    double* block = state_->pose(static_cast<int>(i));
+    pose_blocks.push_back(block);
+    ceres_problem.SetManifold(block, &manifold_);
+    if (problem_.pose_fixed[i]) ceres_problem.SetParameterBlockConstant(block);
   }
-  for (int j = 0; j < num_points; ++j) {
+  for (size_t j = 0; j < point_used.size(); ++j) {
     if (!point_used[j]) continue;
-    point_blocks.push_back(state_->point(j));
+    double* block = state_->point(static_cast<int>(j));
+    point_blocks.push_back(block);
     if (!problem_.point_fixed.empty() && problem_.point_fixed[j]) {
-      ceres_problem.SetParameterBlockConstant(state_->point(j));
-    } else {
-      ++free_points;
+      ceres_problem.SetParameterBlockConstant(block);
     }
   }
-  if (free_poses + free_points == 0) return 0;
   const State before = *state_;
   ceres::Solver::Summary summary;
   ceres::Solve(SolverOptions(iterations, free_poses, free_points, pose_blocks, point_blocks),

@@ -37,11 +37,19 @@ struct BundleAdjusterOptions {
   double chi2_stereo = kChi2Stereo;
   bool robust = true;  // Huber with delta sqrt(chi2_*) in the first stage
   int num_threads = 1;
-  // Linear solver of the reduced camera system after the points are eliminated (Schur
+  // Ceres's linear solver of the reduced camera system after the points are eliminated (Schur
   // complement): DENSE_SCHUR up to this many free poses, SPARSE_SCHUR (SuiteSparse) above. 0:
   // always sparse, which optim_benchmark measured as fast as or slightly faster than dense even
   // for a local BA's 7 free keyframes (94 vs 101 ms CPU, 10k edges).
   int dense_schur_max_poses = 0;
+  // Which solver runs the Levenberg-Marquardt stages. kSchurLM (schur_lm.h: fixed-size blocks and
+  // a dense reduced camera system, 3-6x faster than Ceres on local BAs of RGB-D and stereo maps,
+  // docs/RUNNING.md) for problems of up to schur_lm_max_poses free poses, Ceres beyond (its sparse
+  // reduced camera system: a global BA over a long trajectory); kCeres always Ceres. Both follow
+  // Ceres's Levenberg-Marquardt and reach the same minimum (tests).
+  enum class Solver { kSchurLM, kCeres };
+  Solver solver = Solver::kSchurLM;
+  int schur_lm_max_poses = 300;
   // ORB-SLAM2's abort flag (mbAbortBA): when another thread sets it, the solver stops after its
   // current iteration, the second stage is skipped, and the result so far is returned (edges are
   // still classified). Monocular tracking sets it to get a keyframe into a busy local mapper.

@@ -30,12 +30,19 @@ void BM_OptimizePose(benchmark::State& state) {
 }
 BENCHMARK(BM_OptimizePose)->Arg(300)->Arg(1000)->Unit(benchmark::kMillisecond);
 
-// Arg 0: dense_schur_max_poses (0 = always SPARSE_SCHUR, 40 = DENSE_SCHUR for 7 free poses).
+// Arg 0: the solver: 0 = the fixed-size Schur solver (schur_lm.h, the default), 1 = Ceres with
+// SPARSE_SCHUR, 2 = Ceres with DENSE_SCHUR. Arg 1: poses (the first 3 fixed); 10 with 2000 points
+// is a local BA of ORB-SLAM2's size (~10000 edges), 40 with 4000 points one of a small room where
+// every keyframe sees the others' points (w_xyz: 60-90 poses, 20000-37000 edges).
 void BM_AdjustBundle(benchmark::State& state) {
   std::mt19937 rng(2);
-  const test::BundleScene scene = test::MakeBundleScene(rng, 10, 3, 2000, 0.62, 0.5, 0.05);
+  const int poses = static_cast<int>(state.range(1));
+  const test::BundleScene scene =
+      test::MakeBundleScene(rng, poses, 3, poses == 10 ? 2000 : 4000, 0.62, 0.5, 0.05);
   BundleAdjusterOptions options;
-  options.dense_schur_max_poses = static_cast<int>(state.range(0));
+  options.solver = state.range(0) == 0 ? BundleAdjusterOptions::Solver::kSchurLM
+                                       : BundleAdjusterOptions::Solver::kCeres;
+  options.dense_schur_max_poses = state.range(0) == 2 ? 1000 : 0;
   int iterations = 0;
   for (auto _ : state) {
     const BundleResult result = AdjustBundle(scene.problem, options);
@@ -44,9 +51,11 @@ void BM_AdjustBundle(benchmark::State& state) {
   }
   state.counters["edges"] = static_cast<double>(scene.problem.edges.size());
   state.counters["iterations"] = iterations;
-  state.SetLabel(options.dense_schur_max_poses >= 7 ? "dense_schur" : "sparse_schur");
+  state.SetLabel(state.range(0) == 0   ? "schur_lm"
+                 : state.range(0) == 1 ? "ceres_sparse_schur"
+                                       : "ceres_dense_schur");
 }
-BENCHMARK(BM_AdjustBundle)->Arg(40)->Arg(0)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AdjustBundle)->ArgsProduct({{0, 1, 2}, {10, 40}})->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace moslam::optim
