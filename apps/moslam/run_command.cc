@@ -32,6 +32,7 @@
 #include "moslam/util/error.h"
 #include "moslam/util/strings.h"
 #include "moslam/viewer/live_viewer.h"
+#include "moslam/vocab/shipped_location.h"
 #if MOSLAM_HAVE_SLAM
 #include "moslam/slam/system.h"
 #endif
@@ -117,11 +118,9 @@ std::vector<std::string> SplitList(const std::string& text, const std::string& o
   }
 }
 
-// The vocabulary shipped with the repository (docs/VOCABULARY.md), relative to its root, where
-// moslam is run from like the configs/ paths of the examples.
-constexpr const char* kShippedVocabulary = "data/vocab/moslam_orb.mvoc";
-
-// --vocabulary: a file, "none", or "default" = the shipped one when it is there (else none).
+// --vocabulary: a file, "none", or "default" = the one shipped with the repository
+// (docs/VOCABULARY.md), looked for in the working folder and above the executable
+// (vocab/shipped_location.h), else none.
 std::string ResolveVocabulary(const std::string& arg) {
   if (arg == "none") return "";
   if (arg != "default") {
@@ -131,11 +130,18 @@ std::string ResolveVocabulary(const std::string& arg) {
     if (!std::filesystem::is_regular_file(arg)) ThrowInput("--vocabulary: no file '{}'", arg);
     return arg;
   }
-  if (std::filesystem::is_regular_file(kShippedVocabulary)) return kShippedVocabulary;
+  const std::filesystem::path cwd = std::filesystem::current_path();
+  const std::filesystem::path exe = vocab::CurrentExecutable();
+  const std::filesystem::path found = vocab::FindShippedVocabulary(cwd, exe);
+  if (!found.empty()) {
+    // Relative to the working folder where it is there (the paths in summary.json stay short).
+    return found == cwd / vocab::kShippedVocabulary ? std::string(vocab::kShippedVocabulary)
+                                                    : found.string();
+  }
   spdlog::warn(
-      "no vocabulary ({} not found here; run from the repository root or pass "
-      "--vocabulary FILE): no relocalization or loop closing",
-      kShippedVocabulary);
+      "no vocabulary ({} is neither in the working folder nor above {}; pass --vocabulary FILE): "
+      "no relocalization or loop closing",
+      vocab::kShippedVocabulary, exe.empty() ? std::string("the executable") : exe.string());
   return "";
 }
 
