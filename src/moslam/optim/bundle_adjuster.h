@@ -35,8 +35,8 @@ struct BundleAdjusterOptions {
   int iterations_second = 10;  // after outlier removal, no robust loss (ORB-SLAM2: 10)
   double chi2_mono = kChi2Mono;
   double chi2_stereo = kChi2Stereo;
-  bool robust = true;  // Huber with delta sqrt(chi2_*) in the first stage
-  int num_threads = 1;
+  bool robust = true;   // Huber with delta sqrt(chi2_*) in the first stage
+  int num_threads = 1;  // Ceres only; the Schur solver (below) runs on the calling thread
   // Ceres's linear solver of the reduced camera system after the points are eliminated (Schur
   // complement): DENSE_SCHUR up to this many free poses, SPARSE_SCHUR (SuiteSparse) above. 0:
   // always sparse, which optim_benchmark measured as fast as or slightly faster than dense even
