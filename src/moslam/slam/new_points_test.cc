@@ -2,6 +2,7 @@
 #include "moslam/slam/new_points.h"
 
 #include <algorithm>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -99,6 +100,46 @@ TEST(SearchForTriangulation, MonocularPairsSearchWithinVocabularyNodes) {
   EXPECT_EQ(split, brute);
   const vocab::FeatureVector swapped2 = by_parity(f2.size(), 5, 3);
   EXPECT_TRUE(search(&split1, &swapped2).empty());
+}
+
+// The search over every keypoint (stereo / RGB-D pairs; monocular ones without a direct index)
+// sets aside those outside the epipolar band before the other tests. It must keep exactly the
+// candidates the test applied one by one keeps, in the same order (ties in descriptor distance go
+// to the first): compared with the one-node direct index, which hands every keypoint to that
+// test in index order, on keypoints moved 0-4 px off their lines at every pyramid level (band
+// half widths 2-7 px, so many sit at its edge), with descriptors repeated so that ties occur.
+TEST(SearchForTriangulation, BandPrefilterKeepsTheSameMatches) {
+  const testing::Scene scene = testing::RandomScene(400, 8);
+  map::Map map;
+  std::lock_guard<std::mutex> lock(map.mutex());
+  auto kf1 = testing::ObserveScene(&map, scene, testing::CameraAt(0.0));
+  auto kf2 = testing::ObserveScene(&map, scene, testing::CameraAt(1.0));
+  feature::Frame f1 = kf1->frame, f2 = kf2->frame;
+  f1.bf = f2.bf = 0.0;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> offset(-4.0f, 4.0f);
+  std::uniform_int_distribution<int> octave(0, 7);
+  for (feature::Frame* f : {&f1, &f2}) {
+    for (auto& kp : f->keypoints_undistorted) {
+      kp.pt += cv::Point2f(offset(rng), offset(rng));
+      kp.octave = octave(rng);
+    }
+  }
+  for (int i = 0; i + 1 < f2.descriptors.rows; i += 3) {  // a third of frame2's descriptors twice
+    f2.descriptors.row(i).copyTo(f2.descriptors.row(i + 1));
+  }
+  std::vector<bool> free1(f1.size(), true), free2(f2.size(), true);
+  for (size_t i = 0; i < free2.size(); i += 7) free2[i] = false;
+  vocab::FeatureVector one1, one2;
+  for (uint32_t i = 0; i < f1.size(); ++i) one1[0].push_back(i);
+  for (uint32_t i = 0; i < f2.size(); ++i) one2[0].push_back(i);
+  const auto search = [&](const vocab::FeatureVector* fv1, const vocab::FeatureVector* fv2) {
+    return SearchForTriangulation(f1, kf1->T_cam_world(), free1, f2, kf2->T_cam_world(), free2,
+                                  testing::TestCamera(), fv1, fv2);
+  };
+  const auto one_by_one = search(&one1, &one2);
+  ASSERT_GT(one_by_one.size(), 100u);
+  EXPECT_EQ(search(nullptr, nullptr), one_by_one);
 }
 
 }  // namespace
