@@ -38,19 +38,19 @@ struct SystemOptions {
   int keyframe_queue_capacity = 8;  // bounded queue tracking -> local mapping (keyframes)
   // Deterministic mode only: how local mapping is timed (issue 28). 1 (default): each keyframe is
   // mapped at once, so mapping is never busy, tracking makes a keyframe whenever it would like
-  // one and every keyframe runs its local bundle adjustment: 5-7x slower than a threaded run on
-  // the walking presets. Otherwise a stand-in for the mapping thread: keyframes wait in a queue on
-  // a clock of tracked frames and are mapped at the start of the frame their time comes in, so
-  // tracking sees a busy mapper (ORB-SLAM2's AcceptKeyFrames is false while it maps, and tracking
-  // then inserts a keyframe only when it must: slam/tracker.cc, NeedNewKeyFrame) and a map that
-  // lags, and the keyframes mapped while others wait skip the neighbour search and the local
-  // bundle adjustment, as a thread does. A keyframe takes this many frames (>= 2), or with 0 as
-  // long as its thread would on the data set's clock (settings' Camera.fps): 1 + the observations
-  // of the last local bundle adjustment x deterministic_mapping_ms_per_observation, in frames, at
-  // most a second's (mapping's work, counted without a clock: the same on every machine; 0.06 ms
-  // matches the keyframe counts of threaded runs since the local BA left Ceres, 0.12 before). On
-  // the RGB-D walking presets 0 makes as many keyframes as threaded runs at 0.75-1.05x their
-  // speed, KITTI 06 stereo at 0.8x; on monocular KITTI 07 the map then lags too far, as in a
+  // one and every keyframe runs its local bundle adjustment: 1-2.6x slower than a threaded run on
+  // the walking presets (w_xyz the slowest). Otherwise a stand-in for the mapping thread: keyframes
+  // wait in a queue on a clock of tracked frames and are mapped at the start of the frame their
+  // time comes in, so tracking sees a busy mapper (ORB-SLAM2's AcceptKeyFrames is false while it
+  // maps, and tracking then inserts a keyframe only when it must: slam/tracker.cc, NeedNewKeyFrame)
+  // and a map that lags, and the keyframes mapped while others wait skip the neighbour search and
+  // the local bundle adjustment, as a thread does. A keyframe takes this many frames (>= 2), or
+  // with 0 as long as its thread would on the data set's clock (settings' Camera.fps): 1 + the
+  // observations of the last local bundle adjustment x deterministic_mapping_ms_per_observation, in
+  // frames, at most a second's (mapping's work, counted without a clock: the same on every machine;
+  // 0.06 ms matches the keyframe counts of threaded runs since the local BA left Ceres, 0.12
+  // before). On the RGB-D walking presets 0 makes as many keyframes as threaded runs at 0.75-1.05x
+  // their speed, KITTI 06 stereo at 0.8x; on monocular KITTI 07 the map then lags too far, as in a
   // threaded run (docs/RUNNING.md, "Deterministic runs"); and the tests and docs/EVALUATION.md
   // measure the best case of a mapping thread, which is why 1 stays the default.
   int deterministic_mapping_frames = 1;
