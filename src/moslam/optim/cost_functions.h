@@ -103,14 +103,22 @@ bool ProjectionResidual(const CameraModel& camera, const Observation& observatio
   return true;
 }
 
-// d p_cam / d xi for p_cam' = Exp(xi) * p_cam at xi = 0 is [I, -Hat(p_cam)]; chained onto
-// d r / d p_cam and written into the 7 columns of a row-major pose Jacobian block (7th = 0).
+// d p_cam / d xi for p_cam' = Exp(xi) * p_cam at xi = 0 is [I, -Hat(p_cam)], chained onto
+// d r / d p_cam (TangentPoseJacobian; the Schur solver of schur_lm.h uses it as it is) and written
+// into the 7 columns of a row-major pose Jacobian block, 7th = 0 (WritePoseJacobian).
+template <int N>
+Eigen::Matrix<double, N, kPoseTangent> TangentPoseJacobian(const Eigen::Matrix<double, N, 3>& J_p,
+                                                           const Eigen::Vector3d& p_cam) {
+  Eigen::Matrix<double, N, kPoseTangent> J;
+  J.template leftCols<3>() = J_p;
+  J.template rightCols<3>() = J_p * -geometry::Hat(p_cam);
+  return J;
+}
 template <int N>
 void WritePoseJacobian(const Eigen::Matrix<double, N, 3>& J_p, const Eigen::Vector3d& p_cam,
                        double* jacobian) {
   Eigen::Map<Eigen::Matrix<double, N, kPoseSize, Eigen::RowMajor>> J(jacobian);
-  J.template leftCols<3>() = J_p;
-  J.template block<N, 3>(0, 3) = J_p * -geometry::Hat(p_cam);
+  J.template leftCols<kPoseTangent>() = TangentPoseJacobian<N>(J_p, p_cam);
   J.col(6).setZero();
 }
 

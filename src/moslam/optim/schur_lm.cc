@@ -8,8 +8,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "moslam/geometry/so3.h"
 #include "moslam/optim/cost_functions.h"
+#include "moslam/util/check.h"
 
 namespace moslam::optim::internal {
 namespace {
@@ -194,8 +194,8 @@ void Solver::Linearize() {
   for (size_t k = 0; k < edges_.size(); ++k) {
     EdgeTerms& term = terms_[k];
     const BundleProblem::Edge& edge = problem_.edges[edges_[k]];
-    const bool ok = Residual(static_cast<int>(k), poses_, points_, &term.r, &p_cam, &J_p);
-    (void)ok;  // the current variables were evaluated by Cost
+    // Cost succeeded at these variables, so every edge is in front of its camera.
+    MOSLAM_CHECK(Residual(static_cast<int>(k), poses_, points_, &term.r, &p_cam, &J_p));
     double rho1;
     Rho(static_cast<int>(k), term.r.squaredNorm(), &rho1);
     const double scale = std::sqrt(rho1);
@@ -204,9 +204,7 @@ void Solver::Linearize() {
     const int i = free_pose_[edge.pose];
     const int j = free_point_[edge.point];
     if (i >= 0) {
-      // d p_cam / d xi = [I, -Hat(p_cam)] (geometry/so3.h's left perturbation).
-      term.J_pose.leftCols<3>() = J_p;
-      term.J_pose.rightCols<3>().noalias() = -J_p * geometry::Hat(p_cam);
+      term.J_pose = TangentPoseJacobian<3>(J_p, p_cam);
       U_[i].noalias() += term.J_pose.transpose() * term.J_pose;
       b_[i].noalias() += term.J_pose.transpose() * term.r;
     }

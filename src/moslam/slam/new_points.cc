@@ -105,11 +105,12 @@ void NewPointsOptions::Check() const {
 }
 
 namespace {
-// A frame's keypoints laid out as plain arrays for the epipolar band test of
-// SearchForTriangulation, with its arithmetic (so the same keypoints pass): run pair by pair on
-// the keypoint structs inside the search, that test over every pair of keypoints was a third of
-// a deterministic stereo KITTI 06 run's CPU (perf, 2026-12-07); with the test over arrays the
-// whole search takes 40 % less (2.7 -> 1.6 s of CPU in that run, the same matches).
+// The epipolar band of SearchForTriangulation over a frame's keypoints: within 3.84 sigma^2 of
+// a line (chi-square, 1 DoF, 95 %) at the keypoint's pyramid level. The keypoints are laid out as
+// plain arrays: run pair by pair on the keypoint structs inside the search, this test over every
+// pair of keypoints was a third of a deterministic stereo KITTI 06 run's CPU (perf, 2026-12-07);
+// over arrays the whole search takes 40 % less (2.7 -> 1.6 s of CPU in that run, the same
+// matches).
 class EpipolarBand {
  public:
   explicit EpipolarBand(const feature::Frame& frame) {
@@ -120,25 +121,40 @@ class EpipolarBand {
     for (size_t i = 0; i < kps.size(); ++i) {
       x_[i] = kps[i].pt.x;
       y_[i] = kps[i].pt.y;
-      band_[i] = 3.84 * frame.level_sigma2[kps[i].octave];  // chi-square, 1 DoF, 95 %
+      band_[i] = 3.84 * frame.level_sigma2[kps[i].octave];
     }
     within_.reserve(kps.size());
   }
 
-  // The keypoints within the band of `line` (a x + b y + c = 0), in index order; valid until the
+  // Every keypoint within the band of `line` (a x + b y + c = 0), in index order; valid until the
   // next call.
   const std::vector<size_t>& Within(const Eigen::Vector3d& line) {
     within_.clear();
     const double line_norm2 = line.x() * line.x() + line.y() * line.y();
     if (line_norm2 == 0.0) return within_;
     for (size_t i = 0; i < x_.size(); ++i) {
-      const double num = line.x() * x_[i] + line.y() * y_[i] + line.z();
-      if (num * num < band_[i] * line_norm2) within_.push_back(i);
+      if (Inside(i, line, line_norm2)) within_.push_back(i);
+    }
+    return within_;
+  }
+  // The same among `candidates`, in their order.
+  template <class Indices>
+  const std::vector<size_t>& Within(const Eigen::Vector3d& line, const Indices& candidates) {
+    within_.clear();
+    const double line_norm2 = line.x() * line.x() + line.y() * line.y();
+    if (line_norm2 == 0.0) return within_;
+    for (const size_t i : candidates) {
+      if (Inside(i, line, line_norm2)) within_.push_back(i);
     }
     return within_;
   }
 
  private:
+  bool Inside(size_t i, const Eigen::Vector3d& line, double line_norm2) const {
+    const double num = line.x() * x_[i] + line.y() * y_[i] + line.z();
+    return num * num < band_[i] * line_norm2;
+  }
+
   std::vector<double> x_, y_, band_;
   std::vector<size_t> within_;
 };
@@ -165,19 +181,18 @@ std::vector<std::pair<size_t, size_t>> SearchForTriangulation(
   std::vector<bool> used2(kps2.size(), false);
   std::vector<std::pair<size_t, size_t>> matches;
   std::vector<float> angles;
-  // Best free, unused keypoint of frame2 among `candidates` for keypoint i1: descriptor distance
-  // <= kThLow, off the epipole, within 3.84 sigma^2 (chi-square, 1 DoF) of i1's epipolar line.
-  const auto match_one = [&](size_t i1, const auto& candidates) {
-    const Eigen::Vector3d line = F * Eigen::Vector3d(kps1[i1].pt.x, kps1[i1].pt.y, 1.0);
-    const double line_norm2 = line.x() * line.x() + line.y() * line.y();
-    if (line_norm2 == 0.0) return;
+  EpipolarBand band(frame2);
+  const auto epipolar_line = [&](size_t i1) {
+    return Eigen::Vector3d(F * Eigen::Vector3d(kps1[i1].pt.x, kps1[i1].pt.y, 1.0));
+  };
+  // Best free, unused keypoint of frame2 among `in_band` (the candidates within the epipolar band
+  // of keypoint i1, EpipolarBand) for i1: descriptor distance <= kThLow, off the epipole.
+  const auto match_one = [&](size_t i1, const std::vector<size_t>& in_band) {
     int best_dist = feature::kThLow + 1;
     int best_i2 = -1;
-    for (const size_t i2 : candidates) {
+    for (const size_t i2 : in_band) {
       if (!free2_mask[i2] || used2[i2]) continue;
       const Eigen::Vector2d x2(kps2[i2].pt.x, kps2[i2].pt.y);
-      const double num = line.x() * x2.x() + line.y() * x2.y() + line.z();
-      if (num * num >= 3.84 * frame2.level_sigma2[kps2[i2].octave] * line_norm2) continue;
       if (epipole_visible &&
           (x2 - epipole).squaredNorm() < 100.0 * frame2.scale_factors[kps2[i2].octave]) {
         continue;
@@ -209,20 +224,15 @@ std::vector<std::pair<size_t, size_t>> SearchForTriangulation(
         it2 = features2->lower_bound(it1->first);
       } else {
         for (const uint32_t i1 : it1->second) {
-          if (free1[i1]) match_one(i1, it2->second);
+          if (free1[i1]) match_one(i1, band.Within(epipolar_line(i1), it2->second));
         }
         ++it1;
         ++it2;
       }
     }
   } else {
-    // Every keypoint of frame2 is a candidate; those outside the epipolar band are set aside
-    // first (EpipolarBand), the same ones match_one's band test would reject.
-    EpipolarBand band(frame2);
     for (size_t i1 = 0; i1 < kps1.size(); ++i1) {
-      if (free1[i1]) {
-        match_one(i1, band.Within(F * Eigen::Vector3d(kps1[i1].pt.x, kps1[i1].pt.y, 1.0)));
-      }
+      if (free1[i1]) match_one(i1, band.Within(epipolar_line(i1)));
     }
   }
   const std::vector<bool> keep = feature::RotationConsistent(angles);

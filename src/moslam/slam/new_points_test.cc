@@ -2,6 +2,7 @@
 #include "moslam/slam/new_points.h"
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -66,21 +67,39 @@ TEST(SearchForTriangulation, RejectsMatchesOffTheEpipolarLine) {
   EXPECT_TRUE(SearchForTriangulation(*kf1, *kf2, testing::TestCamera()).empty());
 }
 
+// Two keyframes of a random scene 1 m apart, copies of their frames made monocular, and the
+// search between those copies (with or without direct indices).
+struct MonocularPair {
+  MonocularPair(int points, uint32_t seed) : scene(testing::RandomScene(points, seed)) {
+    std::lock_guard<std::mutex> lock(map.mutex());
+    kf1 = testing::ObserveScene(&map, scene, testing::CameraAt(0.0));
+    kf2 = testing::ObserveScene(&map, scene, testing::CameraAt(1.0));
+    f1 = kf1->frame;
+    f2 = kf2->frame;
+    f1.bf = f2.bf = 0.0;
+    free1.assign(f1.size(), true);
+    free2.assign(f2.size(), true);
+  }
+  std::vector<std::pair<size_t, size_t>> Search(const vocab::FeatureVector* fv1,
+                                                const vocab::FeatureVector* fv2) const {
+    return SearchForTriangulation(f1, kf1->T_cam_world(), free1, f2, kf2->T_cam_world(), free2,
+                                  testing::TestCamera(), fv1, fv2);
+  }
+  testing::Scene scene;
+  map::Map map;
+  std::shared_ptr<map::KeyFrame> kf1, kf2;
+  feature::Frame f1, f2;
+  std::vector<bool> free1, free2;
+};
+
 // Monocular pairs with a bag-of-words direct index compare only keypoints under the same
 // vocabulary node (ORB-SLAM2): with every keypoint under one node the result is the brute-force
 // one, with nodes that keep each true pair together too, and nothing matches across nodes.
 TEST(SearchForTriangulation, MonocularPairsSearchWithinVocabularyNodes) {
-  const testing::Scene scene = testing::RandomScene(120, 6);
-  map::Map map;
-  std::lock_guard<std::mutex> lock(map.mutex());
-  auto kf1 = testing::ObserveScene(&map, scene, testing::CameraAt(0.0));
-  auto kf2 = testing::ObserveScene(&map, scene, testing::CameraAt(1.0));
-  feature::Frame f1 = kf1->frame, f2 = kf2->frame;
-  f1.bf = f2.bf = 0.0;  // monocular
-  const std::vector<bool> free1(f1.size(), true), free2(f2.size(), true);
+  const MonocularPair pair(120, 6);
+  const feature::Frame &f1 = pair.f1, &f2 = pair.f2;
   const auto search = [&](const vocab::FeatureVector* fv1, const vocab::FeatureVector* fv2) {
-    return SearchForTriangulation(f1, kf1->T_cam_world(), free1, f2, kf2->T_cam_world(), free2,
-                                  testing::TestCamera(), fv1, fv2);
+    return pair.Search(fv1, fv2);
   };
   const auto brute = search(nullptr, nullptr);
   ASSERT_GT(brute.size(), 60u);
@@ -102,20 +121,45 @@ TEST(SearchForTriangulation, MonocularPairsSearchWithinVocabularyNodes) {
   EXPECT_TRUE(search(&split1, &swapped2).empty());
 }
 
+// The epipolar band is 3.84 sigma^2 (chi-square, 1 DoF, 95 %) at the keypoint's pyramid level:
+// with the cameras 1 m apart along x the epipolar lines are the image rows, so a keypoint moved
+// off its row by 0.9 of the band's half width sqrt(3.84) * 1.2^octave still matches and one moved
+// by 1.1 of it does not, at every level.
+TEST(SearchForTriangulation, BandHalfWidthFollowsThePyramidLevel) {
+  MonocularPair pair(240, 10);
+  auto& kps = pair.f2.keypoints_undistorted;
+  for (size_t i = 0; i < kps.size(); ++i) {
+    kps[i].octave = static_cast<int>(i % 8);
+    const float half_width = std::sqrt(3.84f * pair.f2.level_sigma2[kps[i].octave]);
+    kps[i].pt.y += (i % 16 < 8 ? 0.9f : 1.1f) * half_width * (i % 2 == 0 ? 1.0f : -1.0f);
+  }
+  std::vector<bool> matched(kps.size(), false);
+  for (const auto& [i1, i2] : pair.Search(nullptr, nullptr)) {
+    ASSERT_EQ(i1, i2);
+    matched[i2] = true;
+  }
+  int inside = 0, inside_matched = 0;
+  for (size_t i = 0; i < kps.size(); ++i) {
+    if (i % 16 < 8) {
+      ++inside;
+      inside_matched += matched[i];
+    } else {
+      EXPECT_FALSE(matched[i]) << "keypoint " << i << " at octave " << kps[i].octave;
+    }
+  }
+  // Keypoints outside frame1's image have no partner.
+  EXPECT_GT(inside_matched, inside * 8 / 10);
+}
+
 // The search over every keypoint (stereo / RGB-D pairs; monocular ones without a direct index)
-// sets aside those outside the epipolar band before the other tests. It must keep exactly the
-// candidates the test applied one by one keeps, in the same order (ties in descriptor distance go
-// to the first): compared with the one-node direct index, which hands every keypoint to that
-// test in index order, on keypoints moved 0-4 px off their lines at every pyramid level (band
-// half widths 2-7 px, so many sit at its edge), with descriptors repeated so that ties occur.
+// and the search within direct-index nodes take their band candidates two ways (the whole frame,
+// or a node's list); with every keypoint in one node the two must give the same matches in the
+// same order (ties in descriptor distance go to the first): on keypoints moved 0-4 px off their
+// lines at every pyramid level (band half widths 2-7 px, so many sit at its edge), with
+// descriptors repeated so that ties occur. The band's width itself: the test above.
 TEST(SearchForTriangulation, BandPrefilterKeepsTheSameMatches) {
-  const testing::Scene scene = testing::RandomScene(400, 8);
-  map::Map map;
-  std::lock_guard<std::mutex> lock(map.mutex());
-  auto kf1 = testing::ObserveScene(&map, scene, testing::CameraAt(0.0));
-  auto kf2 = testing::ObserveScene(&map, scene, testing::CameraAt(1.0));
-  feature::Frame f1 = kf1->frame, f2 = kf2->frame;
-  f1.bf = f2.bf = 0.0;
+  MonocularPair pair(400, 8);
+  feature::Frame &f1 = pair.f1, &f2 = pair.f2;
   std::mt19937 rng(9);
   std::uniform_real_distribution<float> offset(-4.0f, 4.0f);
   std::uniform_int_distribution<int> octave(0, 7);
@@ -128,18 +172,13 @@ TEST(SearchForTriangulation, BandPrefilterKeepsTheSameMatches) {
   for (int i = 0; i + 1 < f2.descriptors.rows; i += 3) {  // a third of frame2's descriptors twice
     f2.descriptors.row(i).copyTo(f2.descriptors.row(i + 1));
   }
-  std::vector<bool> free1(f1.size(), true), free2(f2.size(), true);
-  for (size_t i = 0; i < free2.size(); i += 7) free2[i] = false;
+  for (size_t i = 0; i < pair.free2.size(); i += 7) pair.free2[i] = false;
   vocab::FeatureVector one1, one2;
   for (uint32_t i = 0; i < f1.size(); ++i) one1[0].push_back(i);
   for (uint32_t i = 0; i < f2.size(); ++i) one2[0].push_back(i);
-  const auto search = [&](const vocab::FeatureVector* fv1, const vocab::FeatureVector* fv2) {
-    return SearchForTriangulation(f1, kf1->T_cam_world(), free1, f2, kf2->T_cam_world(), free2,
-                                  testing::TestCamera(), fv1, fv2);
-  };
-  const auto one_by_one = search(&one1, &one2);
+  const auto one_by_one = pair.Search(&one1, &one2);
   ASSERT_GT(one_by_one.size(), 100u);
-  EXPECT_EQ(search(nullptr, nullptr), one_by_one);
+  EXPECT_EQ(pair.Search(nullptr, nullptr), one_by_one);
 }
 
 }  // namespace

@@ -47,10 +47,8 @@ void AddObservation(const optim::CameraModel& camera, const optim::Observation& 
                                               r.data(), &J_p)) {
     return;
   }
-  // The pose optimizer's Jacobian (same perturbation), whose 7th column is zero.
-  Eigen::Matrix<double, N, optim::kPoseSize, Eigen::RowMajor> J_pose;
-  optim::internal::WritePoseJacobian<N>(J_p, p_cam, J_pose.data());
-  const auto J = J_pose.template leftCols<6>();
+  // The pose optimizer's Jacobian (same perturbation).
+  const auto J = optim::internal::TangentPoseJacobian<N>(J_p, p_cam);
   normal->H += J.transpose() * J;
   normal->g += J.transpose() * r;
   ++normal->n;
